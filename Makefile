@@ -1,0 +1,33 @@
+# pound: the two commands of the README, plus helpers.
+#   make studies   regenerate every table and figure in results/
+#   make test      run the whole test suite
+# Nothing else is needed on a fresh machine than a Rust toolchain (cargo): plots use a font
+# committed in data/fonts, so no system font or fontconfig package is required.
+
+CARGO ?= cargo
+JOBS ?= $(shell nproc 2>/dev/null || echo 2)
+
+.PHONY: all build test studies bench fmt clippy clean
+
+all: build
+
+build:
+	$(CARGO) build --release --workspace
+
+test:
+	$(CARGO) test --release --workspace
+
+studies: build
+	./target/release/pound studies run --all --out results
+
+bench:
+	$(CARGO) bench -p solvers
+
+fmt:
+	$(CARGO) fmt --all
+
+clippy:
+	$(CARGO) clippy --release --workspace --all-targets
+
+clean:
+	$(CARGO) clean

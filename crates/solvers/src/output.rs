@@ -1,0 +1,128 @@
+//! The result of one analysis, common to both methods (the `pound run --out` JSON).
+
+use serde::Serialize;
+
+/// Peak responses of one building.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct BuildingResponse {
+    pub name: String,
+    /// Peak |story shear| per story, N, story 1 first (V_j = k_j (u_j − u_{j−1})).
+    pub story_shear_max: Vec<f64>,
+    /// Peak |floor displacement| relative to the ground, m, floor 1 first.
+    pub floor_displacement_max: Vec<f64>,
+}
+
+/// One impact (momentum method) or one contact episode (gap element).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Impact {
+    /// Index of the contact in the scene.
+    pub contact: usize,
+    /// Instant of impact (momentum) or of contact closure (gap element), s.
+    pub time: f64,
+    /// u̇_left − u̇_right just before, m/s (> 0 when approaching).
+    pub relative_velocity_before: f64,
+    /// u̇_left − u̇_right just after the impulse or at contact opening, m/s.
+    pub relative_velocity_after: f64,
+    /// −after / before: the restitution actually achieved.
+    pub achieved_restitution: f64,
+    /// Impulse transmitted, N·s.
+    pub impulse: f64,
+    /// Contact duration, s (gap element only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub duration: Option<f64>,
+    /// Peak contact force, N (gap element only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub peak_force: Option<f64>,
+    /// Largest penetration δ, m (gap element only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_penetration: Option<f64>,
+}
+
+/// A phase in which two floors move together (momentum method with c_r < 1).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PersistentContact {
+    pub contact: usize,
+    /// Start and end of the phase, s (end = analysis end if still in contact).
+    pub start: f64,
+    pub end: f64,
+    /// Why it ended: "tension" (contact force would turn tensile) or "end of analysis".
+    pub released_by: String,
+}
+
+/// Energy audit, J. balance_error = initial + input − damping − contact − final.
+#[derive(Debug, Clone, PartialEq, Serialize, Default)]
+pub struct EnergyAudit {
+    /// Kinetic + strain energy at the start (relative motion).
+    pub initial: f64,
+    /// Work done by the ground (effective earthquake forces −M 1 a_g).
+    pub input: f64,
+    /// Dissipated by the classical viscous damping.
+    pub damping: f64,
+    /// Lost in impacts (momentum) or dissipated by the contact element (gap element).
+    pub contact: f64,
+    /// Kinetic + strain energy at the end (plus energy stored in contact springs).
+    #[serde(rename = "final")]
+    pub final_: f64,
+    /// initial + input − damping − contact − final.
+    pub balance_error: f64,
+}
+
+/// Contact flexibility fractions r_N at each contact with the modes actually kept.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ContactFlexibility {
+    pub contact: usize,
+    pub modes_left: usize,
+    pub modes_right: usize,
+    pub r_n_left: f64,
+    pub r_n_right: f64,
+}
+
+/// Solver statistics of one run.
+#[derive(Debug, Clone, PartialEq, Serialize, Default)]
+pub struct Stats {
+    /// Accepted time steps (momentum: propagation segments).
+    pub steps: u64,
+    /// Rejected adaptive steps.
+    pub rejected_steps: u64,
+    /// Right-hand-side evaluations (adaptive).
+    pub rhs_evaluations: u64,
+    /// Located events (closures, openings, releases).
+    pub events: u64,
+    /// Impacts (momentum) or contact episodes (gap element).
+    pub impacts: u64,
+    /// Root-finder iterations spent locating events.
+    pub root_iterations: u64,
+    /// Newton iterations (Newmark).
+    pub newton_iterations: u64,
+    /// Smallest and largest accepted step, s.
+    pub min_step: f64,
+    pub max_step: f64,
+    /// Wall-clock time of the analysis, s.
+    pub wall_seconds: f64,
+}
+
+/// The full result of one analysis.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RunOutput {
+    /// "momentum" or "gap".
+    pub method: String,
+    /// Solver settings in words (e.g. "consistent impulse, 10 modes" or "kelvin-voigt k=1e10 adaptive tol=1e-8").
+    pub settings: String,
+    pub scene: String,
+    /// Simulated duration, s.
+    pub duration: f64,
+    pub buildings: Vec<BuildingResponse>,
+    pub impacts: Vec<Impact>,
+    pub persistent_contacts: Vec<PersistentContact>,
+    pub energy: EnergyAudit,
+    pub stats: Stats,
+    pub r_n: Vec<ContactFlexibility>,
+}
+
+/// Sampled floor displacements (relative to the ground) over time.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct History {
+    pub time: Vec<f64>,
+    /// One row per sample: the floors of building 0 (floor 1 first), then building 1, …
+    pub displacement: Vec<Vec<f64>>,
+}

@@ -1,0 +1,9 @@
+//! Ground motions: records, the exact piecewise-linear propagator, response spectra.
+
+pub mod nigam_jennings;
+pub mod record;
+pub mod spectrum;
+
+pub use nigam_jennings::Propagator;
+pub use record::{GroundMotion, ParseUnitsError, RecordError, RecordFormat, Units};
+pub use spectrum::{default_periods, response_spectrum, SpectrumPoint};

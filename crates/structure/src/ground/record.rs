@@ -1,0 +1,762 @@
+//! Ground-motion records: reading (PEER AT2, two-column, one-column), scaling, peaks and
+//! piecewise-linear interpolation.
+//!
+//! Every record is stored in SI units (m/s²) on a uniform grid: sample `i` is at `t = i·dt`.
+//! Between samples the acceleration is taken as linear, which is also the assumption of
+//! the exact (Nigam–Jennings) integration used for spectra and modal responses, so
+//! [`GroundMotion::pgv`] and [`GroundMotion::pgd`] integrate that same piecewise-linear
+//! function exactly.
+//!
+//! Parsing never panics: every problem comes back as a [`RecordError`] whose message names
+//! the file, the 1-based line and what was expected.
+
+use std::fmt;
+use std::path::Path;
+use std::str::FromStr;
+
+use serde::{Deserialize, Serialize};
+
+/// Units of the acceleration values in a record file.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Units {
+    /// Multiples of standard gravity ([`crate::G`]).
+    #[serde(rename = "g", alias = "G")]
+    G,
+    /// m/s².
+    #[serde(rename = "m/s^2", alias = "m/s2")]
+    MetersPerSecond2,
+    /// cm/s² (gal).
+    #[serde(rename = "cm/s^2", alias = "cm/s2", alias = "gal")]
+    CentimetersPerSecond2,
+}
+
+impl Units {
+    /// Factor converting a value in these units to m/s².
+    pub fn to_si(self) -> f64 {
+        match self {
+            Units::G => crate::G,
+            Units::MetersPerSecond2 => 1.0,
+            Units::CentimetersPerSecond2 => 0.01,
+        }
+    }
+
+    /// The canonical spelling (`"g"`, `"m/s^2"`, `"cm/s^2"`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Units::G => "g",
+            Units::MetersPerSecond2 => "m/s^2",
+            Units::CentimetersPerSecond2 => "cm/s^2",
+        }
+    }
+}
+
+impl fmt::Display for Units {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// Error of [`Units::from_str`].
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown acceleration units `{0}`: expected \"g\", \"m/s^2\" (or \"m/s2\"), \"cm/s^2\" (or \"cm/s2\", \"gal\")")]
+pub struct ParseUnitsError(pub String);
+
+impl FromStr for Units {
+    type Err = ParseUnitsError;
+
+    /// Accepts `g`, `m/s2`, `m/s^2`, `cm/s2`, `cm/s^2`, `gal` (case-insensitive, trimmed).
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "g" => Ok(Units::G),
+            "m/s2" | "m/s^2" => Ok(Units::MetersPerSecond2),
+            "cm/s2" | "cm/s^2" | "gal" => Ok(Units::CentimetersPerSecond2),
+            _ => Err(ParseUnitsError(s.to_string())),
+        }
+    }
+}
+
+/// Layout of a record file.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "format", rename_all = "kebab-case")]
+pub enum RecordFormat {
+    /// PEER NGA `.AT2`: four header lines (line 4 gives NPTS and DT), then the values in g.
+    At2,
+    /// `time accel` per line (whitespace or comma separated); `#` comments and blank lines
+    /// allowed; times uniformly spaced, starting anywhere.
+    TwoColumn { units: Units },
+    /// Values only (one or several per line), with the time step given.
+    OneColumn { dt: f64, units: Units },
+}
+
+/// A uniformly sampled ground acceleration record.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GroundMotion {
+    /// Record name (the file stem for records read from files).
+    pub name: String,
+    /// Time step, s.
+    pub dt: f64,
+    /// Acceleration, m/s²; sample `i` at `t = i·dt`.
+    pub accel: Vec<f64>,
+}
+
+/// Why a record could not be read. Every message names the file, the 1-based line (where
+/// one applies) and what was expected.
+#[derive(Debug, thiserror::Error)]
+pub enum RecordError {
+    #[error("{path}: cannot read the record file: {source}")]
+    Io {
+        path: String,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{origin} line {line}: expected {expected}, found {found:?}")]
+    Header {
+        origin: String,
+        line: usize,
+        expected: String,
+        found: String,
+    },
+    /// `column` is the 1-based character column where the offending token starts.
+    #[error("{origin} line {line}, column {column}: expected {expected}, found {found:?}")]
+    Value {
+        origin: String,
+        line: usize,
+        column: usize,
+        expected: String,
+        found: String,
+    },
+    /// The number of values declared in the header (at `line`) differs from the number present.
+    #[error("{origin} line {line}: the header declares NPTS = {declared} values, but the file holds {found} (expected exactly {declared})")]
+    Count {
+        origin: String,
+        line: usize,
+        declared: usize,
+        found: usize,
+    },
+    #[error("{origin} line {line}: expected a finite number, found {found:?}")]
+    NonFinite {
+        origin: String,
+        line: usize,
+        found: String,
+    },
+    /// `line` is `None` when the time step was given by the caller, not read from the file.
+    #[error("{origin}{}: expected a time step DT > 0 (s), found {dt}", line_suffix(*.line))]
+    BadDt {
+        origin: String,
+        line: Option<usize>,
+        dt: f64,
+    },
+    /// Times in a two-column record that are not uniformly spaced.
+    #[error("{origin} line {line}: expected uniformly spaced times (step {expected_dt} s, relative tolerance 1e-6), found a step of {found_dt} s")]
+    NonUniform {
+        origin: String,
+        line: usize,
+        expected_dt: f64,
+        found_dt: f64,
+    },
+    #[error("{origin} line 1: expected a ground-motion record, found an empty file")]
+    Empty { origin: String },
+    #[error("{origin} line {line}: expected at least 2 acceleration values, found {found}")]
+    TooFewPoints {
+        origin: String,
+        line: usize,
+        found: usize,
+    },
+}
+
+fn line_suffix(line: Option<usize>) -> String {
+    match line {
+        Some(l) => format!(" line {l}"),
+        None => " (given time step)".to_string(),
+    }
+}
+
+/// Shorten untrusted text for messages.
+fn clip(s: &str) -> String {
+    const MAX: usize = 80;
+    if s.chars().count() <= MAX {
+        s.to_string()
+    } else {
+        let mut out: String = s.chars().take(MAX).collect();
+        out.push('…');
+        out
+    }
+}
+
+fn stem(origin: &str) -> String {
+    let file = Path::new(origin)
+        .file_name()
+        .and_then(|f| f.to_str())
+        .unwrap_or(origin);
+    match file.rfind('.') {
+        Some(i) if i > 0 => file[..i].to_string(),
+        _ => file.to_string(),
+    }
+}
+
+/// A numeric token with its position.
+struct Token<'a> {
+    text: &'a str,
+    /// 1-based character column.
+    column: usize,
+}
+
+/// Split a data line into numeric tokens: separated by whitespace (and commas if
+/// `commas`), and split further before a sign that is neither at the token start nor right
+/// after an exponent letter (`1.2340E-02-5.6780E-03` → two values).
+fn tokens(line: &str, commas: bool) -> Vec<Token<'_>> {
+    let is_sep = |c: char| c.is_whitespace() || (commas && (c == ',' || c == ';'));
+    // Whitespace/comma-separated pieces as byte ranges.
+    let mut raw: Vec<(usize, usize)> = Vec::new();
+    let mut start: Option<usize> = None;
+    for (i, c) in line.char_indices() {
+        if is_sep(c) {
+            if let Some(s) = start.take() {
+                raw.push((s, i));
+            }
+        } else if start.is_none() {
+            start = Some(i);
+        }
+    }
+    if let Some(s) = start {
+        raw.push((s, line.len()));
+    }
+    // Split each piece before a sign that does not follow an exponent letter.
+    let mut cuts: Vec<(usize, usize)> = Vec::new();
+    for (s, e) in raw {
+        let mut piece_start = s;
+        let mut prev: Option<char> = None;
+        for (j, c) in line.get(s..e).unwrap_or("").char_indices() {
+            if (c == '-' || c == '+') && j > 0 && !matches!(prev, Some('e' | 'E' | 'd' | 'D')) {
+                cuts.push((piece_start, s + j));
+                piece_start = s + j;
+            }
+            prev = Some(c);
+        }
+        cuts.push((piece_start, e));
+    }
+    cuts.into_iter()
+        .filter(|(s, e)| e > s)
+        .filter_map(|(s, e)| {
+            let text = line.get(s..e)?;
+            let column = line.get(..s).map_or(0, |p| p.chars().count()) + 1;
+            Some(Token { text, column })
+        })
+        .collect()
+}
+
+/// Parse one number (Fortran `D` exponents accepted).
+fn parse_number(text: &str) -> Option<f64> {
+    if text.contains(['d', 'D']) {
+        text.replace(['d', 'D'], "E").parse().ok()
+    } else {
+        text.parse().ok()
+    }
+}
+
+/// Parse a value token: a `Value` error if not a number, `NonFinite` if NaN/inf.
+fn value(tok: &Token<'_>, origin: &str, line: usize, expected: &str) -> Result<f64, RecordError> {
+    match parse_number(tok.text) {
+        Some(v) if v.is_finite() => Ok(v),
+        Some(_) => Err(RecordError::NonFinite {
+            origin: origin.to_string(),
+            line,
+            found: clip(tok.text),
+        }),
+        None => Err(RecordError::Value {
+            origin: origin.to_string(),
+            line,
+            column: tok.column,
+            expected: expected.to_string(),
+            found: clip(tok.text),
+        }),
+    }
+}
+
+fn strip_bom(text: &str) -> &str {
+    text.strip_prefix('\u{feff}').unwrap_or(text)
+}
+
+/// Take a leading number (`[0-9.eE+-]*`) off `s`.
+fn take_number(s: &str) -> (&str, &str) {
+    let end = s
+        .char_indices()
+        .find(|&(_, c)| !(c.is_ascii_digit() || matches!(c, '.' | 'e' | 'E' | '+' | '-')))
+        .map_or(s.len(), |(i, _)| i);
+    s.split_at(end)
+}
+
+/// Parse AT2 line 4 in either style. Returns (npts, dt) or `None`.
+fn parse_at2_npts_dt(line: &str) -> Option<(usize, f64)> {
+    let up = line.trim().to_ascii_uppercase();
+    if let Some(rest) = up.strip_prefix("NPTS") {
+        // NGA-West2 style: NPTS=  7991, DT=   .0050 SEC
+        let rest = rest.trim_start().strip_prefix('=')?.trim_start();
+        let (n, rest) = take_number(rest);
+        let npts: usize = n.parse().ok()?;
+        let rest = rest.trim_start();
+        let rest = rest.strip_prefix(',').unwrap_or(rest).trim_start();
+        let rest = rest
+            .strip_prefix("DT")?
+            .trim_start()
+            .strip_prefix('=')?
+            .trim_start();
+        let (d, rest) = take_number(rest);
+        let dt: f64 = parse_number(d)?;
+        let tail = rest.trim().trim_matches(',').trim();
+        if matches!(
+            tail,
+            "" | "SEC" | "SECS" | "S" | "SECONDS" | "SEC." | "SEC,"
+        ) {
+            Some((npts, dt))
+        } else {
+            None
+        }
+    } else {
+        // Older style: 7991    0.0050    NPTS, DT
+        let mut it = up
+            .split(|c: char| c.is_whitespace() || c == ',')
+            .filter(|s| !s.is_empty());
+        let npts: usize = it.next()?.parse().ok()?;
+        let dt: f64 = parse_number(it.next()?)?;
+        if it.next()? != "NPTS" {
+            return None;
+        }
+        Some((npts, dt))
+    }
+}
+
+const AT2_LINE4: &str = "\"NPTS= <n>, DT= <s> SEC\" or \"<n> <dt> NPTS, DT\"";
+
+impl GroundMotion {
+    /// A record from values already in m/s². Checks `dt > 0` (finite), at least two samples
+    /// and finite values.
+    pub fn new(name: impl Into<String>, dt: f64, accel: Vec<f64>) -> Result<Self, RecordError> {
+        let name = name.into();
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(RecordError::BadDt {
+                origin: name,
+                line: None,
+                dt,
+            });
+        }
+        if accel.len() < 2 {
+            return Err(RecordError::TooFewPoints {
+                origin: name,
+                line: 1,
+                found: accel.len(),
+            });
+        }
+        if let Some(i) = accel.iter().position(|a| !a.is_finite()) {
+            let found = format!("{}", accel[i]);
+            return Err(RecordError::NonFinite {
+                origin: name,
+                line: i + 1,
+                found,
+            });
+        }
+        Ok(GroundMotion { name, dt, accel })
+    }
+
+    /// Read a record file. The record's name is the file stem.
+    pub fn load(path: &Path, format: &RecordFormat) -> Result<Self, RecordError> {
+        let bytes = std::fs::read(path).map_err(|source| RecordError::Io {
+            path: path.display().to_string(),
+            source,
+        })?;
+        let text = String::from_utf8_lossy(&bytes);
+        let origin = path.file_name().map_or_else(
+            || path.display().to_string(),
+            |f| f.to_string_lossy().into_owned(),
+        );
+        match *format {
+            RecordFormat::At2 => Self::from_at2_str(&text, &origin),
+            RecordFormat::TwoColumn { units } => Self::from_two_column_str(&text, &origin, units),
+            RecordFormat::OneColumn { dt, units } => {
+                Self::from_one_column_str(&text, &origin, dt, units)
+            }
+        }
+    }
+
+    /// Parse a PEER AT2 record (values in g). `origin` names the file in messages.
+    pub fn from_at2_str(text: &str, origin: &str) -> Result<Self, RecordError> {
+        let text = strip_bom(text);
+        if text.trim().is_empty() {
+            return Err(RecordError::Empty {
+                origin: origin.to_string(),
+            });
+        }
+        let mut lines = text.lines().enumerate().map(|(i, l)| (i + 1, l));
+        for n in 1..=3 {
+            let Some((_, l)) = lines.next() else {
+                return Err(RecordError::Header {
+                    origin: origin.to_string(),
+                    line: n,
+                    expected: "4 header lines (title, event/station, units, NPTS/DT)".into(),
+                    found: "end of file".into(),
+                });
+            };
+            if n == 3 {
+                let up = l.to_ascii_uppercase();
+                if up.contains("VELOCITY") || up.contains("DISPLACEMENT") {
+                    return Err(RecordError::Header {
+                        origin: origin.to_string(),
+                        line: 3,
+                        expected: "an acceleration time series in units of g".into(),
+                        found: clip(l.trim()),
+                    });
+                }
+            }
+        }
+        let Some((_, l4)) = lines.next() else {
+            return Err(RecordError::Header {
+                origin: origin.to_string(),
+                line: 4,
+                expected: AT2_LINE4.into(),
+                found: "end of file".into(),
+            });
+        };
+        let Some((npts, dt)) = parse_at2_npts_dt(l4) else {
+            return Err(RecordError::Header {
+                origin: origin.to_string(),
+                line: 4,
+                expected: AT2_LINE4.into(),
+                found: clip(l4.trim()),
+            });
+        };
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(RecordError::BadDt {
+                origin: origin.to_string(),
+                line: Some(4),
+                dt,
+            });
+        }
+        let mut accel = Vec::with_capacity(npts.min(1 << 24));
+        let mut last_line = 4;
+        for (ln, l) in lines {
+            for tok in tokens(l, false) {
+                let v = value(&tok, origin, ln, "a number (acceleration in g)")?;
+                accel.push(v * crate::G);
+                last_line = ln;
+            }
+        }
+        if accel.len() != npts {
+            return Err(RecordError::Count {
+                origin: origin.to_string(),
+                line: 4,
+                declared: npts,
+                found: accel.len(),
+            });
+        }
+        if accel.len() < 2 {
+            return Err(RecordError::TooFewPoints {
+                origin: origin.to_string(),
+                line: last_line,
+                found: accel.len(),
+            });
+        }
+        Ok(GroundMotion {
+            name: stem(origin),
+            dt,
+            accel,
+        })
+    }
+
+    /// Parse a two-column `time accel` record. `dt` is derived from the times, which must be
+    /// uniformly spaced (relative tolerance 1e-6 of the step); the first sample is put at
+    /// `t = 0` whatever its time in the file.
+    pub fn from_two_column_str(
+        text: &str,
+        origin: &str,
+        units: Units,
+    ) -> Result<Self, RecordError> {
+        let text = strip_bom(text);
+        let mut times: Vec<(f64, usize)> = Vec::new();
+        let mut accel = Vec::new();
+        let mut any = false;
+        for (i, raw) in text.lines().enumerate() {
+            let ln = i + 1;
+            let l = raw.split('#').next().unwrap_or("");
+            if l.trim().is_empty() {
+                any |= !raw.trim().is_empty();
+                continue;
+            }
+            any = true;
+            let toks = tokens(l, true);
+            if toks.len() != 2 {
+                let (column, found) = match toks.get(2) {
+                    Some(t) => (t.column, l.trim().to_string()),
+                    None => (toks.first().map_or(1, |t| t.column), l.trim().to_string()),
+                };
+                return Err(RecordError::Value {
+                    origin: origin.to_string(),
+                    line: ln,
+                    column,
+                    expected: format!("2 values per line (time in s, acceleration in {units})"),
+                    found: clip(&found),
+                });
+            }
+            let t = value(&toks[0], origin, ln, "a number (time in s)")?;
+            let a = value(
+                &toks[1],
+                origin,
+                ln,
+                &format!("a number (acceleration in {units})"),
+            )?;
+            times.push((t, ln));
+            accel.push(a * units.to_si());
+        }
+        if !any {
+            return Err(RecordError::Empty {
+                origin: origin.to_string(),
+            });
+        }
+        let last_line = times.last().map_or(1, |&(_, l)| l);
+        if accel.len() < 2 {
+            return Err(RecordError::TooFewPoints {
+                origin: origin.to_string(),
+                line: last_line,
+                found: accel.len(),
+            });
+        }
+        let (t0, _) = times[0];
+        let (tn, _) = times[times.len() - 1];
+        let dt = (tn - t0) / (times.len() - 1) as f64;
+        if !(dt.is_finite() && dt > 0.0) {
+            let (t1, l1) = times[1];
+            return Err(RecordError::BadDt {
+                origin: origin.to_string(),
+                line: Some(l1),
+                dt: t1 - t0,
+            });
+        }
+        for w in times.windows(2) {
+            let step = w[1].0 - w[0].0;
+            if !((step - dt).abs() <= 1e-6 * dt) {
+                return Err(RecordError::NonUniform {
+                    origin: origin.to_string(),
+                    line: w[1].1,
+                    expected_dt: dt,
+                    found_dt: step,
+                });
+            }
+        }
+        Ok(GroundMotion {
+            name: stem(origin),
+            dt,
+            accel,
+        })
+    }
+
+    /// Parse a record of values only (one or several per line; `#` comments and blank lines
+    /// allowed) with the given time step.
+    pub fn from_one_column_str(
+        text: &str,
+        origin: &str,
+        dt: f64,
+        units: Units,
+    ) -> Result<Self, RecordError> {
+        let text = strip_bom(text);
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(RecordError::BadDt {
+                origin: origin.to_string(),
+                line: None,
+                dt,
+            });
+        }
+        let mut accel = Vec::new();
+        let mut last_line = 1;
+        let mut any = false;
+        for (i, raw) in text.lines().enumerate() {
+            let ln = i + 1;
+            let l = raw.split('#').next().unwrap_or("");
+            any |= !raw.trim().is_empty();
+            for tok in tokens(l, true) {
+                accel.push(
+                    value(
+                        &tok,
+                        origin,
+                        ln,
+                        &format!("a number (acceleration in {units})"),
+                    )? * units.to_si(),
+                );
+                last_line = ln;
+            }
+        }
+        if !any {
+            return Err(RecordError::Empty {
+                origin: origin.to_string(),
+            });
+        }
+        if accel.len() < 2 {
+            return Err(RecordError::TooFewPoints {
+                origin: origin.to_string(),
+                line: last_line,
+                found: accel.len(),
+            });
+        }
+        Ok(GroundMotion {
+            name: stem(origin),
+            dt,
+            accel,
+        })
+    }
+
+    /// Number of samples.
+    pub fn npts(&self) -> usize {
+        self.accel.len()
+    }
+
+    /// `(npts − 1)·dt`, s.
+    pub fn duration(&self) -> f64 {
+        self.accel.len().saturating_sub(1) as f64 * self.dt
+    }
+
+    /// Peak ground acceleration max |a|, m/s².
+    pub fn pga(&self) -> f64 {
+        self.accel.iter().fold(0.0, |m: f64, a| m.max(a.abs()))
+    }
+
+    /// Peak ground velocity, m/s: the peak of |v(t)| over the whole record (between samples
+    /// too) for the exact integral of the piecewise-linear acceleration, from rest, with no
+    /// baseline correction.
+    pub fn pgv(&self) -> f64 {
+        let dt = self.dt;
+        let mut v = 0.0f64;
+        let mut peak = 0.0f64;
+        for w in self.accel.windows(2) {
+            let (a0, a1) = (w[0], w[1]);
+            // Interior extremum where a(τ) = 0.
+            if (a0 > 0.0 && a1 < 0.0) || (a0 < 0.0 && a1 > 0.0) {
+                let tau = a0 / (a0 - a1) * dt;
+                peak = peak.max((v + 0.5 * a0 * tau).abs());
+            }
+            v += 0.5 * dt * (a0 + a1);
+            peak = peak.max(v.abs());
+        }
+        peak
+    }
+
+    /// Peak ground displacement, m: the peak of |d(t)| over the whole record (between
+    /// samples too) for the exact double integral of the piecewise-linear acceleration, from
+    /// rest, with no baseline correction.
+    pub fn pgd(&self) -> f64 {
+        let dt = self.dt;
+        let (mut v, mut d) = (0.0f64, 0.0f64);
+        let mut peak = 0.0f64;
+        for w in self.accel.windows(2) {
+            let (a0, a1) = (w[0], w[1]);
+            let s = (a1 - a0) / dt; // jerk
+                                    // v(τ) = v + a0 τ + s τ²/2; d(τ) = d + v τ + a0 τ²/2 + s τ³/6.
+            let dat = |tau: f64| d + tau * (v + tau * (0.5 * a0 + tau * s / 6.0));
+            for tau in quadratic_roots(0.5 * s, a0, v) {
+                if tau > 0.0 && tau < dt {
+                    peak = peak.max(dat(tau).abs());
+                }
+            }
+            d += dt * v + dt * dt * (a0 / 3.0 + a1 / 6.0);
+            v += 0.5 * dt * (a0 + a1);
+            peak = peak.max(d.abs());
+        }
+        peak
+    }
+
+    /// The record multiplied by `factor`.
+    pub fn scaled(&self, factor: f64) -> Self {
+        GroundMotion {
+            name: self.name.clone(),
+            dt: self.dt,
+            accel: self.accel.iter().map(|a| a * factor).collect(),
+        }
+    }
+
+    /// The record scaled so that its PGA is `pga_g`·G (to rounding). An all-zero record is
+    /// returned unchanged (it cannot be scaled to a PGA).
+    pub fn scaled_to_pga(&self, pga_g: f64) -> Self {
+        let pga = self.pga();
+        if pga > 0.0 {
+            self.scaled(pga_g * crate::G / pga)
+        } else {
+            self.clone()
+        }
+    }
+
+    /// Acceleration at time `t`, m/s², linear between samples; 0 for `t < 0`,
+    /// `t > duration` and NaN.
+    pub fn accel_at(&self, t: f64) -> f64 {
+        let n = self.accel.len();
+        if n == 0 || !(t >= 0.0) || t > self.duration() {
+            return 0.0;
+        }
+        if n == 1 {
+            return self.accel[0];
+        }
+        let x = t / self.dt;
+        let i = (x.floor() as usize).min(n - 2);
+        let r = x - i as f64;
+        self.accel[i] + r * (self.accel[i + 1] - self.accel[i])
+    }
+
+    /// Sample times `i·dt`, s.
+    pub fn times(&self) -> impl Iterator<Item = f64> {
+        let dt = self.dt;
+        (0..self.accel.len()).map(move |i| i as f64 * dt)
+    }
+}
+
+/// Real roots of `a x² + b x + c` (stable formulas; degenerate cases handled).
+fn quadratic_roots(a: f64, b: f64, c: f64) -> Vec<f64> {
+    if a == 0.0 {
+        return if b != 0.0 { vec![-c / b] } else { vec![] };
+    }
+    let disc = b * b - 4.0 * a * c;
+    if disc < 0.0 {
+        return vec![];
+    }
+    let q = -0.5 * (b + b.signum() * disc.sqrt());
+    if q == 0.0 {
+        return vec![0.0];
+    }
+    vec![q / a, c / q]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn split_stuck_negatives() {
+        let t: Vec<_> = tokens("1.2340E-02-5.6780E-03 -1.0", false)
+            .into_iter()
+            .map(|t| (t.text, t.column))
+            .collect();
+        assert_eq!(
+            t,
+            vec![("1.2340E-02", 1), ("-5.6780E-03", 11), ("-1.0", 23)]
+        );
+    }
+
+    #[test]
+    fn header_styles() {
+        assert_eq!(
+            parse_at2_npts_dt("NPTS=  7991, DT=   .0050 SEC"),
+            Some((7991, 0.005))
+        );
+        assert_eq!(
+            parse_at2_npts_dt("npts= 10 dt= 0.005 sec"),
+            Some((10, 0.005))
+        );
+        assert_eq!(
+            parse_at2_npts_dt("  7991    0.0050    NPTS, DT"),
+            Some((7991, 0.005))
+        );
+        assert_eq!(parse_at2_npts_dt("NPTS= x, DT= 0.01 SEC"), None);
+    }
+
+    #[test]
+    fn quadratic() {
+        let mut r = quadratic_roots(1.0, -3.0, 2.0);
+        r.sort_by(f64::total_cmp);
+        assert_eq!(r, vec![1.0, 2.0]);
+    }
+}

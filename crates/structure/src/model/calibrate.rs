@@ -1,0 +1,97 @@
+//! Calibration of a shear stick to two target frequencies.
+//!
+//! Uniform floor mass `m` and a linearly tapered story-stiffness profile with two parameters,
+//!
+//! ```text
+//! k_j = K · (1 − β (j − 1) / n),   j = 1 … n,   β < 1
+//! ```
+//!
+//! The frequency ratio f₂/f₁ depends on β alone (scaling K scales every ω by √K), so β is
+//! found by Brent's method on the ratio, then K = K₀ (f₁ / f₁(K₀))². β = 0 is the uniform
+//! stick, whose ratio is sin(3π/(2(2n+1))) / sin(π/(2(2n+1))) ≈ 3; a softer top (β > 0)
+//! lowers the ratio, a softer base (β < 0) raises it. Ratios above ≈ 3 (both paper buildings:
+//! 3.33 and 3.78) therefore need stories that stiffen with height: the planar shear stick
+//! stands in for a flexural-shear building, whose higher modes are further apart.
+
+use super::{Building, ModelError};
+
+/// The result of a calibration: the building and its profile parameters.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Calibration {
+    pub building: Building,
+    /// Base story stiffness K, N/m.
+    pub k_base: f64,
+    /// Taper β (dimensionless): the top story has stiffness K (1 − β (n−1)/n).
+    pub taper: f64,
+}
+
+fn profile(n: usize, k: f64, beta: f64) -> Vec<f64> {
+    (0..n)
+        .map(|j| k * (1.0 - beta * j as f64 / n as f64))
+        .collect()
+}
+
+fn first_two(b: &Building) -> Result<(f64, f64), ModelError> {
+    let m = b.modes()?;
+    Ok((m.omega[0], m.omega[1]))
+}
+
+/// Builds an `n`-floor stick of uniform floor mass `mass` (kg) whose first two frequencies
+/// are `f1_hz` and `f2_hz`, with damping ratio `zeta` in every mode.
+pub fn calibrate_two_frequencies(
+    name: &str,
+    n: usize,
+    mass: f64,
+    f1_hz: f64,
+    f2_hz: f64,
+    zeta: f64,
+) -> Result<Calibration, ModelError> {
+    let fail = |reason: String| ModelError::Calibration {
+        building: name.to_string(),
+        reason,
+    };
+    if n < 2 {
+        return Err(fail(format!(
+            "two target frequencies need at least 2 floors, got {n}"
+        )));
+    }
+    if !(f1_hz.is_finite() && f2_hz.is_finite() && f1_hz > 0.0 && f2_hz > f1_hz) {
+        return Err(fail(format!(
+            "targets must satisfy 0 < f1 < f2, got {f1_hz} and {f2_hz} Hz"
+        )));
+    }
+    let k0 = 1.0e9;
+    let ratio_at = |beta: f64| -> Result<f64, ModelError> {
+        let b = Building::new(name, vec![mass; n], profile(n, k0, beta), zeta);
+        let (w1, w2) = first_two(&b)?;
+        Ok(w2 / w1)
+    };
+    let target = f2_hz / f1_hz;
+    // β range: from a base 50× softer than the top to a top 50× softer than the base.
+    let hi_beta = (1.0 - 0.02) * n as f64 / (n as f64 - 1.0);
+    let lo_beta = -49.0 * n as f64 / (n as f64 - 1.0);
+    let (r_lo, r_hi) = (ratio_at(lo_beta)?, ratio_at(hi_beta)?);
+    if !(r_lo.min(r_hi) <= target && target <= r_lo.max(r_hi)) {
+        return Err(fail(format!(
+            "the ratio f2/f1 = {target:.4} is outside what a linear taper reaches ({:.4} … {:.4})",
+            r_hi.min(r_lo),
+            r_hi.max(r_lo)
+        )));
+    }
+    let g = |beta: f64| ratio_at(beta).map_or(f64::NAN, |r| r - target);
+    let mut conv = roots::SimpleConvergency {
+        eps: 1e-14,
+        max_iter: 200,
+    };
+    let beta = roots::find_root_brent(lo_beta, hi_beta, g, &mut conv)
+        .map_err(|e| fail(format!("root search for the taper failed: {e:?}")))?;
+    let b0 = Building::new(name, vec![mass; n], profile(n, k0, beta), zeta);
+    let (w1, _) = first_two(&b0)?;
+    let k = k0 * (2.0 * std::f64::consts::PI * f1_hz / w1).powi(2);
+    let building = Building::new(name, vec![mass; n], profile(n, k, beta), zeta);
+    Ok(Calibration {
+        building,
+        k_base: k,
+        taper: beta,
+    })
+}

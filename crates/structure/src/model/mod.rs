@@ -1,0 +1,31 @@
+//! Planar lumped-mass shear sticks: matrices, modes, calibration.
+//!
+//! A building with `n` floors has one horizontal degree of freedom per floor, `u[0]` the
+//! lowest floor, all displacements relative to the ground. Story `j` (1-based) joins floor
+//! `j-1` (the ground for `j = 1`) to floor `j` with stiffness `k_j`:
+//!
+//! ```text
+//! M = diag(m_1 … m_n)
+//! K_jj = k_j + k_{j+1} (k_{n+1} = 0),  K_{j,j+1} = K_{j+1,j} = −k_{j+1}
+//! C = M Φ diag(2 ζ_n ω_n) Φᵀ M          (classical modal damping, paper eq. 27)
+//! story shear V_j = k_j (u_j − u_{j−1}),  u_0 = 0
+//! ```
+
+pub mod building;
+pub mod calibrate;
+pub mod modes;
+
+pub use building::{Building, Damping};
+pub use calibrate::{calibrate_two_frequencies, Calibration};
+pub use modes::Modes;
+
+/// Errors raised while building or analysing a model.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ModelError {
+    #[error("building `{building}`: {what}")]
+    Invalid { building: String, what: String },
+    #[error("building `{building}`: the eigen-solver failed: {reason}")]
+    Eigen { building: String, reason: String },
+    #[error("calibration of building `{building}` failed: {reason}")]
+    Calibration { building: String, reason: String },
+}

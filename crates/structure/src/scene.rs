@@ -1,0 +1,885 @@
+//! Scene files: buildings, contacts, ground motion and solver options, in TOML.
+//!
+//! The format is documented in the README ("Scene files"). Loading happens in two stages:
+//! the text is parsed into raw serde structs with `deny_unknown_fields` (so a misspelt key
+//! is an error that names it, with line and column), then validated into model types
+//! ([`Scene`]) with errors that name the file and the dotted key (`contacts[0].gap`).
+//!
+//! `--set PATH=VALUE` overrides edit the parsed TOML tree before validation: `PATH` is a
+//! dotted path whose numeric segments index arrays (`contacts.0.gap`), `VALUE` is parsed as
+//! a TOML value and, failing that, taken as a bare string (`gap_element.law=linear`).
+
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+use crate::ground::{GroundMotion, RecordError, RecordFormat, Units};
+use crate::model::{calibrate_two_frequencies, Building, Damping, ModelError};
+
+/// Errors from reading, overriding or validating a scene.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    #[error("cannot read scene file {file}: {source}")]
+    Io {
+        file: String,
+        source: std::io::Error,
+    },
+    #[error("{file}: {message}")]
+    Parse { file: String, message: String },
+    #[error("{file}: key `{key}`: {message}")]
+    Invalid {
+        file: String,
+        key: String,
+        message: String,
+    },
+    #[error("--set {expr}: {message}")]
+    Override { expr: String, message: String },
+    #[error("{file}: key `ground_motion.file`: {source}")]
+    Record { file: String, source: RecordError },
+    #[error("{file}: {source}")]
+    Model { file: String, source: ModelError },
+}
+
+/// Variant of the momentum method's impulse (`momentum.impulse`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, serde::Serialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum ImpulseVariant {
+    /// P = (1 + c_r) v_rel / W with W the Delassus value of the kept modes: exact
+    /// restitution and momentum conservation with any number of modes.
+    #[default]
+    Consistent,
+    /// The paper's eqs (23)–(24) with floor masses, projected on the kept modes.
+    Paper,
+}
+
+/// Options of the modal momentum solver (`[momentum]`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct MomentumOptions {
+    /// Modes kept per building; `None` = all (default). Clamped to each building's floors.
+    pub modes: Option<usize>,
+    /// Impulse variant (default `consistent`).
+    pub impulse: ImpulseVariant,
+    /// Switch to a persistent-contact phase when impacts accumulate (default true).
+    pub persistent_contact: bool,
+    /// Approach speed, m/s, below which a contact that keeps closing is captured into a
+    /// persistent-contact phase (default 1e-4 m/s).
+    pub capture_velocity: f64,
+}
+
+impl Default for MomentumOptions {
+    fn default() -> Self {
+        MomentumOptions {
+            modes: None,
+            impulse: ImpulseVariant::Consistent,
+            persistent_contact: true,
+            capture_velocity: 1e-4,
+        }
+    }
+}
+
+/// Contact law of the gap element (`gap_element.law`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, serde::Serialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum ContactLaw {
+    /// Compression-only linear spring k⟨δ⟩.
+    Linear,
+    /// Spring and dashpot (Anagnostopoulos), ξ from c_r.
+    #[default]
+    KelvinVoigt,
+    /// Hertz spring k_h δ^{3/2} with Muthukumar–DesRoches damping.
+    HertzDamp,
+}
+
+/// Time integrator of the gap-element solver (`gap_element.integrator`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, serde::Serialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum Integrator {
+    /// Embedded Runge–Kutta pair with error control and event location (default).
+    #[default]
+    Adaptive,
+    /// Fixed-step average-acceleration Newmark with Newton iterations.
+    Newmark,
+}
+
+/// Options of the gap-element solver (`[gap_element]`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct GapElementOptions {
+    /// Spring stiffness k, N/m (N/m^1.5 for `hertz-damp`). Default 1e10.
+    pub stiffness: f64,
+    /// Contact law (default `kelvin-voigt`).
+    pub law: ContactLaw,
+    /// Integrator (default `adaptive`).
+    pub integrator: Integrator,
+    /// Adaptive: relative error tolerance per step (default 1e-8); the absolute tolerance is
+    /// this times 1e-3 m (displacements) and 1e-3 m/s (velocities).
+    pub tolerance: f64,
+    /// Newmark: fixed time step, s (default 1e-3).
+    pub time_step: f64,
+    /// Kelvin–Voigt: let the dashpot pull (tensile force) until the gap reopens (true) or
+    /// clamp the force at zero and end contact when it vanishes (false, default).
+    pub tension: bool,
+}
+
+impl Default for GapElementOptions {
+    fn default() -> Self {
+        GapElementOptions {
+            stiffness: 1.0e10,
+            law: ContactLaw::KelvinVoigt,
+            integrator: Integrator::Adaptive,
+            tolerance: 1.0e-8,
+            time_step: 1.0e-3,
+            tension: false,
+        }
+    }
+}
+
+/// Guardrails shared by both solvers (`[analysis]`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Limits {
+    /// Most impacts per second of simulated time before the run stops as an event storm
+    /// (default 2000 /s).
+    pub max_impact_rate: f64,
+    /// Most time steps (or events) in one run (default 50 000 000).
+    pub max_steps: u64,
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Limits {
+            max_impact_rate: 2000.0,
+            max_steps: 50_000_000,
+        }
+    }
+}
+
+/// A contact pair between two floors of two buildings.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Contact {
+    /// Index of the left building in [`Scene::buildings`].
+    pub left: usize,
+    /// 0-based floor index (DOF) of the left building (scene files count floors from 1).
+    pub left_dof: usize,
+    /// Index of the right building.
+    pub right: usize,
+    /// 0-based floor index of the right building.
+    pub right_dof: usize,
+    /// Gap at rest, m (≥ 0). In contact while u_left − u_right ≥ gap.
+    pub gap: f64,
+    /// Coefficient of restitution c_r in [0, 1].
+    pub restitution: f64,
+}
+
+impl Contact {
+    /// Gap function δ = u_left − u_right − gap (m): closed when δ ≥ 0.
+    pub fn penetration(&self, u_left: f64, u_right: f64) -> f64 {
+        u_left - u_right - self.gap
+    }
+}
+
+/// Where the ground motion came from (for reports and the OpenSees export).
+#[derive(Debug, Clone, PartialEq)]
+pub struct GroundMotionSource {
+    /// Resolved path of the record file.
+    pub file: PathBuf,
+    pub format: RecordFormat,
+    /// Factor applied to the record as read (1 if neither `pga` nor `scale` is given).
+    pub factor: f64,
+    /// Target PGA, g, if `pga` was given.
+    pub pga_g: Option<f64>,
+}
+
+/// A validated scene.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Scene {
+    pub name: String,
+    /// The scene file, if it came from one.
+    pub file: Option<PathBuf>,
+    pub buildings: Vec<Building>,
+    pub contacts: Vec<Contact>,
+    /// Ground acceleration (m/s², already scaled); `None` = free vibration.
+    pub ground: Option<GroundMotion>,
+    pub ground_source: Option<GroundMotionSource>,
+    /// Analysis duration, s.
+    pub duration: f64,
+    pub momentum: MomentumOptions,
+    pub gap_element: GapElementOptions,
+    pub limits: Limits,
+}
+
+// ---------------------------------------------------------------------------------------
+// Raw file structures
+
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum ScalarOrList {
+    Scalar(f64),
+    List(Vec<f64>),
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawScene {
+    name: Option<String>,
+    buildings: Vec<RawBuilding>,
+    #[serde(default)]
+    contacts: Vec<RawContact>,
+    ground_motion: Option<RawGround>,
+    #[serde(default)]
+    analysis: RawAnalysis,
+    #[serde(default)]
+    momentum: RawMomentum,
+    #[serde(default)]
+    gap_element: RawGap,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawBuilding {
+    name: String,
+    masses: Option<Vec<f64>>,
+    stories: Option<usize>,
+    mass: Option<f64>,
+    story_stiffness: Option<ScalarOrList>,
+    target_frequencies_hz: Option<Vec<f64>>,
+    reference_frequencies_hz: Option<Vec<f64>>,
+    damping_ratio: Option<ScalarOrList>,
+    initial_displacement: Option<Vec<f64>>,
+    initial_velocity: Option<Vec<f64>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawContact {
+    left: String,
+    left_floor: i64,
+    right: String,
+    right_floor: i64,
+    gap: f64,
+    #[serde(default = "one")]
+    restitution: f64,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawGround {
+    file: String,
+    format: Option<String>,
+    dt: Option<f64>,
+    units: Option<String>,
+    pga: Option<f64>,
+    scale: Option<f64>,
+}
+
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct RawAnalysis {
+    duration: Option<f64>,
+    max_impact_rate: Option<f64>,
+    max_steps: Option<i64>,
+}
+
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct RawMomentum {
+    modes: Option<i64>,
+    impulse: Option<ImpulseVariant>,
+    persistent_contact: Option<bool>,
+    capture_velocity: Option<f64>,
+}
+
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct RawGap {
+    stiffness: Option<f64>,
+    law: Option<ContactLaw>,
+    integrator: Option<Integrator>,
+    tolerance: Option<f64>,
+    time_step: Option<f64>,
+    tension: Option<bool>,
+}
+
+// ---------------------------------------------------------------------------------------
+// Loading
+
+impl Scene {
+    /// Reads and validates a scene file.
+    pub fn from_file(path: &Path) -> Result<Scene, SceneError> {
+        Self::from_file_with_overrides(path, &[])
+    }
+
+    /// Reads a scene file, applies `PATH=VALUE` overrides, then validates.
+    pub fn from_file_with_overrides(
+        path: &Path,
+        overrides: &[String],
+    ) -> Result<Scene, SceneError> {
+        let file = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+            file: file.clone(),
+            source,
+        })?;
+        let base = path.parent().unwrap_or(Path::new("."));
+        let mut scene = Self::from_str_with_overrides(&text, &file, base, overrides)?;
+        scene.file = Some(path.to_path_buf());
+        Ok(scene)
+    }
+
+    /// Parses scene text. `origin` names it in errors; relative record paths are resolved
+    /// against `base_dir`.
+    pub fn from_str_with_overrides(
+        text: &str,
+        origin: &str,
+        base_dir: &Path,
+        overrides: &[String],
+    ) -> Result<Scene, SceneError> {
+        let parse_err = |message: String| SceneError::Parse {
+            file: origin.to_string(),
+            message,
+        };
+        let raw: RawScene = if overrides.is_empty() {
+            toml::from_str(text).map_err(|e| parse_err(e.to_string().trim_end().to_string()))?
+        } else {
+            let mut table: toml::Table = toml::from_str(text)
+                .map_err(|e| parse_err(e.to_string().trim_end().to_string()))?;
+            for expr in overrides {
+                apply_override(&mut table, expr)?;
+            }
+            toml::Value::Table(table)
+                .try_into()
+                .map_err(|e: toml::de::Error| {
+                    parse_err(format!(
+                        "after --set overrides: {}",
+                        e.to_string().trim_end()
+                    ))
+                })?
+        };
+        validate(raw, origin, base_dir)
+    }
+
+    /// Index of the building called `name`.
+    pub fn building_index(&self, name: &str) -> Option<usize> {
+        self.buildings.iter().position(|b| b.name == name)
+    }
+
+    /// Ground acceleration at time `t`, m/s² (0 without a record or outside it).
+    pub fn ground_accel(&self, t: f64) -> f64 {
+        self.ground.as_ref().map_or(0.0, |g| g.accel_at(t))
+    }
+}
+
+/// Applies one `PATH=VALUE` override to a parsed TOML table.
+pub fn apply_override(table: &mut toml::Table, expr: &str) -> Result<(), SceneError> {
+    let fail = |message: String| SceneError::Override {
+        expr: expr.to_string(),
+        message,
+    };
+    let (path, value) = expr
+        .split_once('=')
+        .ok_or_else(|| fail("expected PATH=VALUE, e.g. contacts.0.gap=0.05".into()))?;
+    let path = path.trim();
+    let value = value.trim();
+    if path.is_empty() {
+        return Err(fail("the path before `=` is empty".into()));
+    }
+    let parsed: toml::Value = match toml::from_str::<toml::Table>(&format!("v = {value}")) {
+        Ok(mut t) => t
+            .remove("v")
+            .unwrap_or(toml::Value::String(value.to_string())),
+        Err(_) => toml::Value::String(value.to_string()),
+    };
+    let segs: Vec<&str> = path.split('.').collect();
+    let mut cur: &mut toml::Value = {
+        let first = segs[0];
+        if segs.len() == 1 {
+            table.insert(first.to_string(), parsed);
+            return Ok(());
+        }
+        table
+            .entry(first.to_string())
+            .or_insert_with(|| toml::Value::Table(toml::Table::new()))
+    };
+    for (i, seg) in segs.iter().enumerate().skip(1) {
+        let last = i + 1 == segs.len();
+        let so_far = segs[..i].join(".");
+        cur = match cur {
+            toml::Value::Array(arr) => {
+                let idx: usize = seg.parse().map_err(|_| {
+                    fail(format!(
+                        "`{so_far}` is an array: expected a numeric index, found `{seg}`"
+                    ))
+                })?;
+                let len = arr.len();
+                let slot = arr.get_mut(idx).ok_or_else(|| {
+                    fail(format!(
+                        "index {idx} is out of range: `{so_far}` has {len} entries"
+                    ))
+                })?;
+                if last {
+                    *slot = parsed;
+                    return Ok(());
+                }
+                slot
+            }
+            toml::Value::Table(t) => {
+                if last {
+                    t.insert(seg.to_string(), parsed);
+                    return Ok(());
+                }
+                t.entry(seg.to_string())
+                    .or_insert_with(|| toml::Value::Table(toml::Table::new()))
+            }
+            _ => return Err(fail(format!("`{so_far}` is a value, not a table or array"))),
+        };
+    }
+    Ok(())
+}
+
+fn validate(raw: RawScene, origin: &str, base_dir: &Path) -> Result<Scene, SceneError> {
+    let invalid = |key: String, message: String| SceneError::Invalid {
+        file: origin.to_string(),
+        key,
+        message,
+    };
+    let model_err = |source: ModelError| SceneError::Model {
+        file: origin.to_string(),
+        source,
+    };
+    if raw.buildings.is_empty() {
+        return Err(invalid(
+            "buildings".into(),
+            "at least one [[buildings]] table is required".into(),
+        ));
+    }
+    let mut buildings = Vec::with_capacity(raw.buildings.len());
+    for (bi, rb) in raw.buildings.into_iter().enumerate() {
+        let key = |k: &str| format!("buildings[{bi}].{k}");
+        if buildings.iter().any(|b: &Building| b.name == rb.name) {
+            return Err(invalid(
+                key("name"),
+                format!("building name `{}` is used twice", rb.name),
+            ));
+        }
+        let zeta_list = match rb.damping_ratio {
+            None => Damping::Uniform(0.05),
+            Some(ScalarOrList::Scalar(z)) => Damping::Uniform(z),
+            Some(ScalarOrList::List(v)) => Damping::PerMode(v),
+        };
+        let masses: Vec<f64> = match (&rb.masses, rb.stories, rb.mass) {
+            (Some(m), None, None) => m.clone(),
+            (None, Some(n), Some(m)) => {
+                if n == 0 {
+                    return Err(invalid(key("stories"), "expected a whole number >= 1".into()));
+                }
+                vec![m; n]
+            }
+            (Some(_), _, _) => {
+                return Err(invalid(key("masses"), "give either `masses` or `stories` with `mass`, not both".into()))
+            }
+            _ => {
+                return Err(invalid(
+                    key("masses"),
+                    "missing: give `masses = [...]` (kg per floor) or `stories = N` with `mass = M` (kg)".into(),
+                ))
+            }
+        };
+        if let Some((i, m)) = masses
+            .iter()
+            .enumerate()
+            .find(|(_, m)| !(m.is_finite() && **m > 0.0))
+        {
+            return Err(invalid(
+                format!("buildings[{bi}].masses[{i}]"),
+                format!("{m}: expected a finite mass > 0 (kg)"),
+            ));
+        }
+        let n = masses.len();
+        let (stiffness, calibrated) = match (rb.story_stiffness, &rb.target_frequencies_hz) {
+            (Some(_), Some(_)) => {
+                return Err(invalid(
+                    key("target_frequencies_hz"),
+                    "give `story_stiffness` or `target_frequencies_hz`, not both".into(),
+                ))
+            }
+            (Some(ScalarOrList::Scalar(k)), None) => (vec![k; n], None),
+            (Some(ScalarOrList::List(k)), None) => (k, None),
+            (None, Some(f)) => {
+                if f.len() != 2 {
+                    return Err(invalid(
+                        key("target_frequencies_hz"),
+                        format!("expected 2 values (f1, f2 in Hz), found {}", f.len()),
+                    ));
+                }
+                if masses.iter().any(|m| *m != masses[0]) {
+                    return Err(invalid(
+                        key("target_frequencies_hz"),
+                        "calibration needs a uniform floor mass".into(),
+                    ));
+                }
+                let c = calibrate_two_frequencies(
+                    &rb.name,
+                    n,
+                    masses[0],
+                    f[0],
+                    f[1],
+                    zeta_list.ratio(0),
+                )
+                .map_err(model_err)?;
+                (c.building.story_stiffness.clone(), Some(c))
+            }
+            (None, None) => {
+                return Err(invalid(
+                    key("story_stiffness"),
+                    "missing: give `story_stiffness` (N/m) or `target_frequencies_hz`".into(),
+                ))
+            }
+        };
+        let _ = calibrated;
+        if stiffness.len() != n {
+            return Err(invalid(
+                key("story_stiffness"),
+                format!(
+                    "has {} values, expected {n} (one per story, as `masses`)",
+                    stiffness.len()
+                ),
+            ));
+        }
+        if let Some((i, k)) = stiffness
+            .iter()
+            .enumerate()
+            .find(|(_, k)| !(k.is_finite() && **k > 0.0))
+        {
+            return Err(invalid(
+                format!("buildings[{bi}].story_stiffness[{i}]"),
+                format!("{k}: expected a finite stiffness > 0 (N/m)"),
+            ));
+        }
+        let b = Building {
+            name: rb.name.clone(),
+            masses,
+            story_stiffness: stiffness,
+            damping: zeta_list,
+            initial_displacement: rb.initial_displacement.unwrap_or_else(|| vec![0.0; n]),
+            initial_velocity: rb.initial_velocity.unwrap_or_else(|| vec![0.0; n]),
+            reference_frequencies_hz: rb.reference_frequencies_hz.unwrap_or_default(),
+        };
+        b.validate().map_err(|e| match e {
+            ModelError::Invalid { what, .. } => invalid(format!("buildings[{bi}]"), what),
+            other => model_err(other),
+        })?;
+        buildings.push(b);
+    }
+
+    let mut contacts = Vec::with_capacity(raw.contacts.len());
+    for (ci, rc) in raw.contacts.into_iter().enumerate() {
+        let key = |k: &str| format!("contacts[{ci}].{k}");
+        let find = |name: &str, k: &str| {
+            buildings
+                .iter()
+                .position(|b| b.name == name)
+                .ok_or_else(|| {
+                    let names: Vec<&str> = buildings.iter().map(|b| b.name.as_str()).collect();
+                    invalid(
+                        key(k),
+                        format!(
+                            "no building named `{name}` (buildings: {})",
+                            names.join(", ")
+                        ),
+                    )
+                })
+        };
+        let left = find(&rc.left, "left")?;
+        let right = find(&rc.right, "right")?;
+        if left == right {
+            return Err(invalid(
+                key("right"),
+                format!(
+                    "a contact joins two different buildings; both sides are `{}`",
+                    rc.left
+                ),
+            ));
+        }
+        let floor = |f: i64, b: usize, k: &str| -> Result<usize, SceneError> {
+            let n = buildings[b].n_floors() as i64;
+            if f < 1 || f > n {
+                return Err(invalid(
+                    key(k),
+                    format!(
+                        "floor {f} is out of range: `{}` has floors 1 … {n}",
+                        buildings[b].name
+                    ),
+                ));
+            }
+            Ok((f - 1) as usize)
+        };
+        let left_dof = floor(rc.left_floor, left, "left_floor")?;
+        let right_dof = floor(rc.right_floor, right, "right_floor")?;
+        if !(rc.gap.is_finite() && rc.gap >= 0.0) {
+            return Err(invalid(
+                key("gap"),
+                format!("{}: expected a finite gap >= 0 (m)", rc.gap),
+            ));
+        }
+        if !(0.0..=1.0).contains(&rc.restitution) {
+            return Err(invalid(
+                key("restitution"),
+                format!(
+                    "{}: expected a coefficient of restitution in [0, 1]",
+                    rc.restitution
+                ),
+            ));
+        }
+        contacts.push(Contact {
+            left,
+            left_dof,
+            right,
+            right_dof,
+            gap: rc.gap,
+            restitution: rc.restitution,
+        });
+    }
+
+    let (ground, ground_source) = match raw.ground_motion {
+        None => (None, None),
+        Some(g) => {
+            let key = |k: &str| format!("ground_motion.{k}");
+            let units = match &g.units {
+                None => Units::G,
+                Some(u) => u.parse::<Units>().map_err(|_| {
+                    invalid(
+                        key("units"),
+                        format!("`{u}`: expected one of \"g\", \"m/s^2\", \"cm/s^2\""),
+                    )
+                })?,
+            };
+            let fmt_name = g.format.clone().unwrap_or_else(|| {
+                if g.file.to_ascii_lowercase().ends_with(".at2") {
+                    "at2".into()
+                } else {
+                    "two-column".into()
+                }
+            });
+            let format = match fmt_name.as_str() {
+                "at2" => {
+                    if g.units.is_some() || g.dt.is_some() {
+                        return Err(invalid(
+                            key("units"),
+                            "AT2 records carry their own units (g) and dt; remove `units`/`dt`"
+                                .into(),
+                        ));
+                    }
+                    RecordFormat::At2
+                }
+                "two-column" => {
+                    if g.dt.is_some() {
+                        return Err(invalid(
+                            key("dt"),
+                            "a two-column record takes its dt from the time column; remove `dt`"
+                                .into(),
+                        ));
+                    }
+                    RecordFormat::TwoColumn { units }
+                }
+                "one-column" => {
+                    let dt = g.dt.ok_or_else(|| {
+                        invalid(
+                            key("dt"),
+                            "missing: a one-column record needs `dt` (s)".into(),
+                        )
+                    })?;
+                    if !(dt.is_finite() && dt > 0.0) {
+                        return Err(invalid(
+                            key("dt"),
+                            format!("{dt}: expected a time step > 0 (s)"),
+                        ));
+                    }
+                    RecordFormat::OneColumn { dt, units }
+                }
+                other => {
+                    return Err(invalid(
+                        key("format"),
+                        format!("`{other}`: expected \"at2\", \"two-column\" or \"one-column\""),
+                    ))
+                }
+            };
+            if g.pga.is_some() && g.scale.is_some() {
+                return Err(invalid(
+                    key("pga"),
+                    "give `pga` or `scale`, not both".into(),
+                ));
+            }
+            if let Some(p) = g.pga {
+                if !(p.is_finite() && p > 0.0) {
+                    return Err(invalid(
+                        key("pga"),
+                        format!("{p}: expected a peak ground acceleration > 0 (g)"),
+                    ));
+                }
+            }
+            if let Some(s) = g.scale {
+                if !s.is_finite() {
+                    return Err(invalid(
+                        key("scale"),
+                        format!("{s}: expected a finite factor"),
+                    ));
+                }
+            }
+            let path = base_dir.join(&g.file);
+            if !path.is_file() {
+                return Err(invalid(
+                    key("file"),
+                    format!("record file {} does not exist", path.display()),
+                ));
+            }
+            let rec = GroundMotion::load(&path, &format).map_err(|source| SceneError::Record {
+                file: origin.to_string(),
+                source,
+            })?;
+            let factor = match (g.pga, g.scale) {
+                (Some(p), _) => {
+                    let pga = rec.pga();
+                    if pga <= 0.0 {
+                        return Err(invalid(
+                            key("pga"),
+                            "the record is all zeros: it cannot be scaled to a PGA".into(),
+                        ));
+                    }
+                    p * crate::G / pga
+                }
+                (None, Some(s)) => s,
+                (None, None) => 1.0,
+            };
+            let scaled = match g.pga {
+                Some(p) => rec.scaled_to_pga(p),
+                None => rec.scaled(factor),
+            };
+            (
+                Some(scaled),
+                Some(GroundMotionSource {
+                    file: path,
+                    format,
+                    factor,
+                    pga_g: g.pga,
+                }),
+            )
+        }
+    };
+
+    let duration = match (raw.analysis.duration, &ground) {
+        (Some(d), _) => {
+            if !(d.is_finite() && d > 0.0) {
+                return Err(invalid(
+                    "analysis.duration".into(),
+                    format!("{d}: expected a duration > 0 (s)"),
+                ));
+            }
+            d
+        }
+        (None, Some(g)) => g.duration(),
+        (None, None) => {
+            return Err(invalid(
+                "analysis.duration".into(),
+                "missing: without a ground motion the duration (s) is required".into(),
+            ))
+        }
+    };
+    let mut limits = Limits::default();
+    if let Some(r) = raw.analysis.max_impact_rate {
+        if !(r.is_finite() && r > 0.0) {
+            return Err(invalid(
+                "analysis.max_impact_rate".into(),
+                format!("{r}: expected impacts per second > 0"),
+            ));
+        }
+        limits.max_impact_rate = r;
+    }
+    if let Some(s) = raw.analysis.max_steps {
+        if s < 1 {
+            return Err(invalid(
+                "analysis.max_steps".into(),
+                format!("{s}: expected a whole number >= 1"),
+            ));
+        }
+        limits.max_steps = s as u64;
+    }
+
+    let mut momentum = MomentumOptions::default();
+    if let Some(m) = raw.momentum.modes {
+        if m < 1 {
+            return Err(invalid(
+                "momentum.modes".into(),
+                format!("{m}: expected a number of modes >= 1"),
+            ));
+        }
+        momentum.modes = Some(m as usize);
+    }
+    if let Some(v) = raw.momentum.impulse {
+        momentum.impulse = v;
+    }
+    if let Some(p) = raw.momentum.persistent_contact {
+        momentum.persistent_contact = p;
+    }
+    if let Some(v) = raw.momentum.capture_velocity {
+        if !(v.is_finite() && v >= 0.0) {
+            return Err(invalid(
+                "momentum.capture_velocity".into(),
+                format!("{v}: expected a speed >= 0 (m/s)"),
+            ));
+        }
+        momentum.capture_velocity = v;
+    }
+
+    let mut gap = GapElementOptions::default();
+    let rg = raw.gap_element;
+    if let Some(k) = rg.stiffness {
+        if !(k.is_finite() && k > 0.0) {
+            return Err(invalid(
+                "gap_element.stiffness".into(),
+                format!("{k}: expected a stiffness > 0 (N/m)"),
+            ));
+        }
+        gap.stiffness = k;
+    }
+    if let Some(l) = rg.law {
+        gap.law = l;
+    }
+    if let Some(i) = rg.integrator {
+        gap.integrator = i;
+    }
+    if let Some(t) = rg.tolerance {
+        if !(t.is_finite() && t > 0.0 && t < 0.1) {
+            return Err(invalid(
+                "gap_element.tolerance".into(),
+                format!("{t}: expected a relative tolerance in (0, 0.1)"),
+            ));
+        }
+        gap.tolerance = t;
+    }
+    if let Some(dt) = rg.time_step {
+        if !(dt.is_finite() && dt > 0.0 && dt <= duration) {
+            return Err(invalid(
+                "gap_element.time_step".into(),
+                format!("{dt}: expected a step > 0 and <= the duration (s)"),
+            ));
+        }
+        gap.time_step = dt;
+    }
+    if let Some(t) = rg.tension {
+        gap.tension = t;
+    }
+
+    Ok(Scene {
+        name: raw.name.unwrap_or_else(|| "scene".into()),
+        file: None,
+        buildings,
+        contacts,
+        ground,
+        ground_source,
+        duration,
+        momentum,
+        gap_element: gap,
+        limits,
+    })
+}

@@ -1,0 +1,818 @@
+//! Integration tests for `structure::ground`: record parsing, scaling, peaks, the
+//! Nigam–Jennings propagator and response spectra.
+
+use std::path::{Path, PathBuf};
+
+use proptest::prelude::*;
+use structure::ground::nigam_jennings::{acceleration, Propagator};
+use structure::ground::spectrum::{default_periods, response_spectrum};
+use structure::ground::{GroundMotion, RecordError, RecordFormat, Units};
+use structure::G;
+
+fn data(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data")
+        .join(name)
+}
+
+fn record(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../data/ground-motions")
+        .join(name)
+}
+
+fn rel(a: f64, b: f64) -> f64 {
+    (a - b).abs() / b.abs().max(1e-300)
+}
+
+const HEAD: &str =
+    "PEER NGA STRONG MOTION DATABASE RECORD\nSYNTHETIC\nACCELERATION TIME SERIES IN UNITS OF G\n";
+
+fn at2(line4: &str, body: &str) -> String {
+    format!("{HEAD}{line4}\n{body}")
+}
+
+// ---------------------------------------------------------------------------------------
+// AT2
+// ---------------------------------------------------------------------------------------
+
+#[test]
+fn at2_new_style_header() {
+    let text = at2(
+        "NPTS=  6, DT=   .0050 SEC",
+        "  1.0E-01 -2.0E-01  3.0E-01\n  4.0E-01  5.0E-01 -6.0E-01\n",
+    );
+    let gm = GroundMotion::from_at2_str(&text, "X.AT2").unwrap();
+    assert_eq!(gm.npts(), 6);
+    assert_eq!(gm.dt, 0.005);
+    assert_eq!(gm.name, "X");
+    let want = [0.1, -0.2, 0.3, 0.4, 0.5, -0.6];
+    for (a, w) in gm.accel.iter().zip(want) {
+        assert_eq!(*a, w * G);
+    }
+    assert_eq!(gm.pga(), 0.6 * G);
+    assert!((gm.duration() - 0.025).abs() < 1e-15);
+}
+
+#[test]
+fn at2_header_variants() {
+    for line4 in [
+        "npts= 3, dt= 0.005 sec",
+        "NPTS= 3 DT= 0.005 SEC",
+        "NPTS=3, DT=0.005 SEC",
+        "NPTS=  3, DT=   .0050 SEC  ",
+        "NPTS= 3, DT= 0.005",
+        "3   0.0050   NPTS, DT",
+        "  3 .005 npts dt",
+    ] {
+        let text = at2(line4, "1.0 2.0 3.0\n");
+        let gm =
+            GroundMotion::from_at2_str(&text, "v.at2").unwrap_or_else(|e| panic!("{line4}: {e}"));
+        assert_eq!(gm.npts(), 3, "{line4}");
+        assert_eq!(gm.dt, 0.005, "{line4}");
+    }
+}
+
+#[test]
+fn at2_old_style_crlf_rows_of_1_and_8_stuck_negatives() {
+    let gm = GroundMotion::load(&data("old_style_crlf.AT2"), &RecordFormat::At2).unwrap();
+    assert_eq!(gm.name, "old_style_crlf");
+    assert_eq!(gm.dt, 0.01);
+    let want = [
+        0.01, -0.02, 0.03, 0.04, -0.05, 0.06, 0.07, 0.08, -0.009, 0.1, 0.2, -0.3,
+    ];
+    assert_eq!(gm.npts(), want.len());
+    for (i, (a, w)) in gm.accel.iter().zip(want).enumerate() {
+        assert_eq!(*a, w * G, "sample {i}");
+    }
+}
+
+#[test]
+fn at2_stuck_negatives_inline_and_fortran_exponents() {
+    let text = at2(
+        "NPTS= 4, DT= 0.01 SEC",
+        "1.2340E-02-5.6780E-03\n-1.0E+00-2.0D-01\n",
+    );
+    let gm = GroundMotion::from_at2_str(&text, "s.AT2").unwrap();
+    let want = [1.2340e-02, -5.6780e-03, -1.0, -0.2];
+    for (a, w) in gm.accel.iter().zip(want) {
+        assert_eq!(*a, w * G);
+    }
+}
+
+#[test]
+fn cap000_parses() {
+    let gm = GroundMotion::load(&record("RSN752_LOMAP_CAP000.AT2"), &RecordFormat::At2).unwrap();
+    assert_eq!(gm.npts(), 7991);
+    assert_eq!(gm.dt, 0.005);
+    assert_eq!(gm.name, "RSN752_LOMAP_CAP000");
+    assert_eq!(format!("{:.3}", gm.pga() / G), "0.529");
+    assert!((gm.duration() - 39.95).abs() < 1e-9);
+    // The first value from the file.
+    assert_eq!(gm.accel[0], -2.0347400e-03 * G);
+}
+
+#[test]
+fn all_shipped_records_parse() {
+    for (f, n, pga) in [
+        ("RSN752_LOMAP_CAP000.AT2", 7991, "0.529"),
+        ("RSN752_LOMAP_CAP090.AT2", 7991, "0.443"),
+        ("RSN767_LOMAP_G03000.AT2", 7989, "0.555"),
+        ("RSN767_LOMAP_G03090.AT2", 7989, "0.367"),
+    ] {
+        let gm = GroundMotion::load(&record(f), &RecordFormat::At2).unwrap();
+        assert_eq!(gm.npts(), n, "{f}");
+        assert_eq!(format!("{:.3}", gm.pga() / G), pga, "{f}");
+        assert!(gm.pgv() > 0.0 && gm.pgv().is_finite());
+        assert!(gm.pgd() > 0.0 && gm.pgd().is_finite());
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Errors
+// ---------------------------------------------------------------------------------------
+
+fn at2_err(text: &str) -> RecordError {
+    match GroundMotion::from_at2_str(text, "RSN752.AT2") {
+        Ok(gm) => panic!("expected an error, got {} points", gm.npts()),
+        Err(e) => e,
+    }
+}
+
+fn msg_has(e: &RecordError, parts: &[&str]) {
+    let m = e.to_string();
+    for p in parts {
+        assert!(m.contains(p), "message {m:?} lacks {p:?}");
+    }
+}
+
+#[test]
+fn error_bad_line4() {
+    let e = at2_err(&at2("NPTS= seven, DT= 0.005 SEC", "1 2\n"));
+    assert!(matches!(e, RecordError::Header { line: 4, .. }), "{e:?}");
+    msg_has(
+        &e,
+        &[
+            "RSN752.AT2 line 4",
+            "expected \"NPTS= <n>, DT= <s> SEC\" or \"<n> <dt> NPTS, DT\"",
+            "NPTS= seven",
+        ],
+    );
+    let e = at2_err(&at2("7991 0.005 POINTS", "1 2\n"));
+    assert!(matches!(e, RecordError::Header { line: 4, .. }), "{e:?}");
+}
+
+#[test]
+fn error_missing_header_lines() {
+    let e = at2_err("TITLE\nEVENT\n");
+    assert!(matches!(e, RecordError::Header { line: 3, .. }), "{e:?}");
+    msg_has(&e, &["RSN752.AT2 line 3", "end of file"]);
+    let e = at2_err(HEAD);
+    assert!(matches!(e, RecordError::Header { line: 4, .. }), "{e:?}");
+    msg_has(&e, &["RSN752.AT2 line 4", "expected"]);
+}
+
+#[test]
+fn error_velocity_file_as_at2() {
+    let e = at2_err("T\nE\nVELOCITY TIME SERIES IN UNITS OF CM/S\nNPTS= 2, DT= 0.01 SEC\n1 2\n");
+    assert!(matches!(e, RecordError::Header { line: 3, .. }), "{e:?}");
+}
+
+#[test]
+fn error_count_more_and_fewer() {
+    let e = at2_err(&at2("NPTS= 4, DT= 0.01 SEC", "1 2 3\n"));
+    assert!(
+        matches!(
+            e,
+            RecordError::Count {
+                declared: 4,
+                found: 3,
+                line: 4,
+                ..
+            }
+        ),
+        "{e:?}"
+    );
+    msg_has(&e, &["RSN752.AT2 line 4", "NPTS = 4", "3"]);
+    let e = at2_err(&at2("NPTS= 2, DT= 0.01 SEC", "1 2 3\n4\n"));
+    assert!(
+        matches!(
+            e,
+            RecordError::Count {
+                declared: 2,
+                found: 4,
+                ..
+            }
+        ),
+        "{e:?}"
+    );
+    msg_has(&e, &["RSN752.AT2 line 4", "expected exactly 2"]);
+}
+
+#[test]
+fn error_non_numeric_value() {
+    let e = at2_err(&at2("NPTS= 4, DT= 0.01 SEC", "1.0 2.0\n3.0 x4.0\n"));
+    match &e {
+        RecordError::Value {
+            line,
+            column,
+            found,
+            ..
+        } => {
+            assert_eq!(*line, 6);
+            assert_eq!(*column, 5);
+            assert_eq!(found, "x4.0");
+        }
+        _ => panic!("{e:?}"),
+    }
+    msg_has(
+        &e,
+        &["RSN752.AT2 line 6", "column 5", "expected a number", "x4.0"],
+    );
+}
+
+#[test]
+fn error_non_finite() {
+    for bad in ["NaN", "inf", "-Infinity", "1e400"] {
+        let e = at2_err(&at2("NPTS= 3, DT= 0.01 SEC", &format!("1.0\n2.0 {bad}\n")));
+        assert!(
+            matches!(e, RecordError::NonFinite { line: 6, .. }),
+            "{bad}: {e:?}"
+        );
+        msg_has(&e, &["RSN752.AT2 line 6", "expected a finite number"]);
+    }
+}
+
+#[test]
+fn error_bad_dt() {
+    for dt in ["0.0", "-0.01", ".0000"] {
+        let e = at2_err(&at2(&format!("NPTS= 2, DT= {dt} SEC"), "1 2\n"));
+        assert!(
+            matches!(e, RecordError::BadDt { line: Some(4), .. }),
+            "{dt}: {e:?}"
+        );
+        msg_has(&e, &["RSN752.AT2 line 4", "expected a time step DT > 0"]);
+    }
+    let e = GroundMotion::from_one_column_str("1 2 3", "o.txt", 0.0, Units::G).unwrap_err();
+    assert!(matches!(e, RecordError::BadDt { line: None, .. }), "{e:?}");
+}
+
+#[test]
+fn error_empty() {
+    for text in ["", "   \n\r\n  ", "\u{feff}"] {
+        let e = at2_err(text);
+        assert!(matches!(e, RecordError::Empty { .. }), "{e:?}");
+        msg_has(&e, &["RSN752.AT2 line 1", "empty"]);
+    }
+    let e = GroundMotion::from_two_column_str("\n\n", "t.csv", Units::G).unwrap_err();
+    assert!(matches!(e, RecordError::Empty { .. }), "{e:?}");
+    let e = GroundMotion::from_one_column_str("", "o.txt", 0.01, Units::G).unwrap_err();
+    assert!(matches!(e, RecordError::Empty { .. }), "{e:?}");
+}
+
+#[test]
+fn error_too_few_points() {
+    let e = at2_err(&at2("NPTS= 1, DT= 0.01 SEC", "1.0\n"));
+    assert!(
+        matches!(e, RecordError::TooFewPoints { found: 1, .. }),
+        "{e:?}"
+    );
+    msg_has(&e, &["RSN752.AT2 line 5", "at least 2"]);
+    let e = at2_err(&at2("NPTS= 0, DT= 0.01 SEC", ""));
+    assert!(
+        matches!(e, RecordError::TooFewPoints { found: 0, .. }),
+        "{e:?}"
+    );
+    let e = GroundMotion::from_two_column_str("0 1\n", "t.csv", Units::G).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            RecordError::TooFewPoints {
+                found: 1,
+                line: 1,
+                ..
+            }
+        ),
+        "{e:?}"
+    );
+}
+
+#[test]
+fn error_io_names_path() {
+    let p = data("does_not_exist.AT2");
+    let e = GroundMotion::load(&p, &RecordFormat::At2).unwrap_err();
+    assert!(matches!(e, RecordError::Io { .. }), "{e:?}");
+    msg_has(&e, &["does_not_exist.AT2"]);
+}
+
+#[test]
+fn error_load_names_file() {
+    // Errors from load() use the file name as origin.
+    let p = data("two_column.txt");
+    let e = GroundMotion::load(&p, &RecordFormat::At2).unwrap_err();
+    msg_has(&e, &["two_column.txt line "]);
+}
+
+// ---------------------------------------------------------------------------------------
+// Two-column and one-column
+// ---------------------------------------------------------------------------------------
+
+#[test]
+fn two_column_fixture() {
+    let gm = GroundMotion::load(
+        &data("two_column.txt"),
+        &RecordFormat::TwoColumn {
+            units: Units::CentimetersPerSecond2,
+        },
+    )
+    .unwrap();
+    assert_eq!(gm.npts(), 5);
+    assert!(rel(gm.dt, 0.02) < 1e-12, "{}", gm.dt);
+    let want = [0.0, 0.10, -0.205, 0.30, -0.40];
+    for (a, w) in gm.accel.iter().zip(want) {
+        assert!((a - w).abs() < 1e-15, "{a} vs {w}");
+    }
+}
+
+#[test]
+fn two_column_errors() {
+    let e = GroundMotion::from_two_column_str("0 1\n0.01 2\n0.03 3\n0.04 4\n", "t.csv", Units::G)
+        .unwrap_err();
+    assert!(matches!(e, RecordError::NonUniform { .. }), "{e:?}");
+    msg_has(&e, &["t.csv line ", "uniformly spaced"]);
+    let e =
+        GroundMotion::from_two_column_str("# c\n0 1\n0.01 2 3\n", "t.csv", Units::G).unwrap_err();
+    assert!(matches!(e, RecordError::Value { line: 3, .. }), "{e:?}");
+    msg_has(&e, &["t.csv line 3", "2 values per line"]);
+    let e = GroundMotion::from_two_column_str("0 1\n0.01\n", "t.csv", Units::G).unwrap_err();
+    assert!(matches!(e, RecordError::Value { line: 2, .. }), "{e:?}");
+    let e = GroundMotion::from_two_column_str("0 1\n0 2\n", "t.csv", Units::G).unwrap_err();
+    assert!(
+        matches!(e, RecordError::BadDt { line: Some(2), .. }),
+        "{e:?}"
+    );
+    let e = GroundMotion::from_two_column_str("1 1\n0 2\n", "t.csv", Units::G).unwrap_err();
+    assert!(matches!(e, RecordError::BadDt { .. }), "{e:?}");
+    let e = GroundMotion::from_two_column_str("0 1\n0.01 abc\n", "t.csv", Units::G).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            RecordError::Value {
+                line: 2,
+                column: 6,
+                ..
+            }
+        ),
+        "{e:?}"
+    );
+    let e = GroundMotion::from_two_column_str("0 1\n0.01 nan\n", "t.csv", Units::G).unwrap_err();
+    assert!(matches!(e, RecordError::NonFinite { line: 2, .. }), "{e:?}");
+}
+
+#[test]
+fn two_column_tolerates_rounded_times() {
+    // dt = 0.01 with 1e-9 jitter (relative 1e-7 of dt): accepted.
+    let text: String = (0..100)
+        .map(|i| {
+            format!(
+                "{:.12} {}\n",
+                i as f64 * 0.01 + if i % 2 == 1 { 1e-9 } else { 0.0 },
+                i
+            )
+        })
+        .collect();
+    let gm = GroundMotion::from_two_column_str(&text, "j.txt", Units::MetersPerSecond2).unwrap();
+    assert_eq!(gm.npts(), 100);
+    assert!(rel(gm.dt, 0.01) < 1e-6);
+}
+
+#[test]
+fn one_column_fixture() {
+    let gm = GroundMotion::load(
+        &data("one_column.txt"),
+        &RecordFormat::OneColumn {
+            dt: 0.02,
+            units: Units::G,
+        },
+    )
+    .unwrap();
+    assert_eq!(gm.npts(), 6);
+    assert_eq!(gm.dt, 0.02);
+    assert_eq!(gm.accel[5], -0.5 * G);
+    let e = GroundMotion::from_one_column_str("1\n2\nfoo\n", "o.txt", 0.01, Units::G).unwrap_err();
+    assert!(matches!(e, RecordError::Value { line: 3, .. }), "{e:?}");
+    msg_has(&e, &["o.txt line 3"]);
+}
+
+#[test]
+fn units_parse_and_deserialize() {
+    for (s, u) in [
+        ("g", Units::G),
+        ("m/s2", Units::MetersPerSecond2),
+        ("m/s^2", Units::MetersPerSecond2),
+        ("cm/s2", Units::CentimetersPerSecond2),
+        ("cm/s^2", Units::CentimetersPerSecond2),
+        ("gal", Units::CentimetersPerSecond2),
+    ] {
+        assert_eq!(s.parse::<Units>().unwrap(), u, "{s}");
+    }
+    assert!("ft/s^2".parse::<Units>().is_err());
+
+    #[derive(serde::Deserialize)]
+    struct W {
+        u: Units,
+        f: RecordFormat,
+    }
+    let w: W = toml::from_str(
+        "u = \"m/s^2\"\nf = { format = \"one-column\", dt = 0.01, units = \"cm/s^2\" }\n",
+    )
+    .unwrap();
+    assert_eq!(w.u, Units::MetersPerSecond2);
+    assert_eq!(
+        w.f,
+        RecordFormat::OneColumn {
+            dt: 0.01,
+            units: Units::CentimetersPerSecond2
+        }
+    );
+    let w: W = toml::from_str("u = \"g\"\nf = { format = \"at2\" }\n").unwrap();
+    assert_eq!(w.f, RecordFormat::At2);
+}
+
+// ---------------------------------------------------------------------------------------
+// Scaling, interpolation, peaks
+// ---------------------------------------------------------------------------------------
+
+#[test]
+fn scaled_to_pga_is_exact() {
+    for f in [
+        "RSN752_LOMAP_CAP000.AT2",
+        "RSN752_LOMAP_CAP090.AT2",
+        "RSN767_LOMAP_G03000.AT2",
+        "RSN767_LOMAP_G03090.AT2",
+    ] {
+        let gm = GroundMotion::load(&record(f), &RecordFormat::At2).unwrap();
+        for target in [0.1, 0.3, 0.35, 0.4, 0.5, 0.529, 1.0, 1.7] {
+            let s = gm.scaled_to_pga(target);
+            let want = target * G;
+            assert!(
+                rel(s.pga(), want) < 4.0 * f64::EPSILON,
+                "{f} {target}: {} vs {}",
+                s.pga(),
+                want
+            );
+            assert_eq!(s.dt, gm.dt);
+            assert_eq!(s.npts(), gm.npts());
+        }
+    }
+    let s = GroundMotion::new("z", 0.01, vec![1.0, -2.0])
+        .unwrap()
+        .scaled(3.0);
+    assert_eq!(s.accel, vec![3.0, -6.0]);
+}
+
+#[test]
+fn accel_at_and_times() {
+    let gm = GroundMotion::new("t", 0.5, vec![0.0, 2.0, -2.0]).unwrap();
+    assert_eq!(gm.accel_at(-1e-12), 0.0);
+    assert_eq!(gm.accel_at(0.0), 0.0);
+    assert_eq!(gm.accel_at(0.25), 1.0);
+    assert_eq!(gm.accel_at(0.5), 2.0);
+    assert_eq!(gm.accel_at(0.75), 0.0);
+    assert_eq!(gm.accel_at(1.0), -2.0);
+    assert_eq!(gm.accel_at(1.0 + 1e-12), 0.0);
+    assert_eq!(gm.accel_at(f64::NAN), 0.0);
+    assert_eq!(gm.times().collect::<Vec<_>>(), vec![0.0, 0.5, 1.0]);
+    assert!(GroundMotion::new("t", 0.5, vec![1.0]).is_err());
+    assert!(GroundMotion::new("t", -0.5, vec![1.0, 2.0]).is_err());
+    assert!(GroundMotion::new("t", 0.5, vec![1.0, f64::NAN]).is_err());
+}
+
+#[test]
+fn pgv_pgd_constant_acceleration() {
+    // a = 2 for 1 s: v = 2, d = 1 exactly.
+    let gm = GroundMotion::new("c", 0.1, vec![2.0; 11]).unwrap();
+    assert!(rel(gm.pgv(), 2.0) < 1e-14);
+    assert!(rel(gm.pgd(), 1.0) < 1e-14);
+}
+
+#[test]
+fn pgv_pgd_catch_peaks_between_samples() {
+    // One coarse interval from +1 to −1 (dt = 1): v(τ) = τ − τ²/2 peaks at τ = 1 with
+    // v = 0.5; on the next interval (−1 → −1) v goes 0.5 → −0.5, so d peaks inside it.
+    let gm = GroundMotion::new("p", 1.0, vec![1.0, -1.0, -1.0]).unwrap();
+    // Dense reference of the exact piecewise-linear integral.
+    let n = 200_000;
+    let h = gm.duration() / n as f64;
+    let (mut v, mut d, mut pv, mut pd) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    for i in 0..n {
+        let (a0, a1) = (gm.accel_at(i as f64 * h), gm.accel_at((i + 1) as f64 * h));
+        d += h * v + h * h * (a0 / 3.0 + a1 / 6.0);
+        v += 0.5 * h * (a0 + a1);
+        pv = pv.max(v.abs());
+        pd = pd.max(d.abs());
+    }
+    assert!(rel(gm.pgv(), pv) < 1e-9, "{} vs {pv}", gm.pgv());
+    assert!(rel(gm.pgd(), pd) < 1e-9, "{} vs {pd}", gm.pgd());
+    // The sample-only peak of d would be smaller: d(1) = 1/3, d(2) = 1/3 + 0.5 - 0.5 = 1/3.
+    assert!(gm.pgd() > 1.0 / 3.0 + 0.1);
+}
+
+// ---------------------------------------------------------------------------------------
+// Nigam–Jennings propagator
+// ---------------------------------------------------------------------------------------
+
+/// Classical RK4 over [0, h] with `n` substeps, f linear from f0 to f1.
+fn rk4(omega: f64, zeta: f64, h: f64, n: usize, x0: f64, v0: f64, f0: f64, f1: f64) -> (f64, f64) {
+    let f = |t: f64| f0 + (f1 - f0) * t / h;
+    let s = h / n as f64;
+    let (mut x, mut v) = (x0, v0);
+    for i in 0..n {
+        let t = i as f64 * s;
+        let k1x = v;
+        let k1v = acceleration(omega, zeta, x, v, f(t));
+        let k2x = v + 0.5 * s * k1v;
+        let k2v = acceleration(omega, zeta, x + 0.5 * s * k1x, k2x, f(t + 0.5 * s));
+        let k3x = v + 0.5 * s * k2v;
+        let k3v = acceleration(omega, zeta, x + 0.5 * s * k2x, k3x, f(t + 0.5 * s));
+        let k4x = v + s * k3v;
+        let k4v = acceleration(omega, zeta, x + s * k3x, k4x, f(t + s));
+        x += s / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
+        v += s / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
+    }
+    (x, v)
+}
+
+#[test]
+fn propagator_matches_rk4_entrywise() {
+    let omega = 3.0;
+    for zeta in [0.0, 0.05, 0.9] {
+        for h in [1e-8, 1e-4, 1e-1, 0.2, 1.0 / 6.0, 1.0] {
+            let p = Propagator::new(omega, zeta, h);
+            let n = ((omega * h / 1e-3).ceil() as usize).max(4);
+            let cols = [
+                (
+                    rk4(omega, zeta, h, n, 1.0, 0.0, 0.0, 0.0),
+                    p.a[0][0],
+                    p.a[1][0],
+                ),
+                (
+                    rk4(omega, zeta, h, n, 0.0, 1.0, 0.0, 0.0),
+                    p.a[0][1],
+                    p.a[1][1],
+                ),
+                (
+                    rk4(omega, zeta, h, n, 0.0, 0.0, 1.0, 0.0),
+                    p.b[0][0],
+                    p.b[1][0],
+                ),
+                (
+                    rk4(omega, zeta, h, n, 0.0, 0.0, 0.0, 1.0),
+                    p.b[0][1],
+                    p.b[1][1],
+                ),
+            ];
+            for (j, ((rx, rv), px, pv)) in cols.into_iter().enumerate() {
+                assert!(
+                    rel(px, rx) < 1e-10,
+                    "zeta {zeta} h {h} col {j}: x {px:e} vs {rx:e} ({:e})",
+                    rel(px, rx)
+                );
+                assert!(
+                    rel(pv, rv) < 1e-10,
+                    "zeta {zeta} h {h} col {j}: v {pv:e} vs {rv:e} ({:e})",
+                    rel(pv, rv)
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn propagator_constant_load_analytic() {
+    // x'' + 2ζωx' + ω²x = F from rest: x = F/ω² (1 − e^{−ζωt}(cos ω_d t + ζω/ω_d sin ω_d t)).
+    let (omega, f) = (2.0 * std::f64::consts::PI / 0.7, 3.5);
+    for zeta in [0.0, 0.05, 0.9] {
+        let wd = omega * (1.0 - zeta * zeta).sqrt();
+        for h in [1e-6, 1e-3, 0.05, 0.3] {
+            let p = Propagator::new(omega, zeta, h);
+            let (mut x, mut v) = (0.0, 0.0);
+            let steps = 200;
+            for _ in 0..steps {
+                (x, v) = p.step(x, v, f, f);
+            }
+            let t = steps as f64 * h;
+            let e = (-zeta * omega * t).exp();
+            let (s, c) = (wd * t).sin_cos();
+            let xe = f / (omega * omega) * (1.0 - e * (c + zeta * omega / wd * s));
+            let ve = f / (omega * omega) * e * (omega * omega / wd) * s;
+            let scale_x = f / (omega * omega);
+            let scale_v = f / omega;
+            // Small h: x ≈ F t²/2 dominates the scale.
+            let sx = scale_x.min(f * t * t);
+            let sv = scale_v.min(f * t);
+            assert!(
+                (x - xe).abs() < 1e-11 * sx,
+                "zeta {zeta} h {h}: x {x:e} vs {xe:e}"
+            );
+            assert!(
+                (v - ve).abs() < 1e-11 * sv,
+                "zeta {zeta} h {h}: v {v:e} vs {ve:e}"
+            );
+        }
+    }
+}
+
+#[test]
+fn propagator_small_h_limits() {
+    let p = Propagator::new(5.0, 0.05, 0.0);
+    assert_eq!(p.a, [[1.0, 0.0], [0.0, 1.0]]);
+    assert_eq!(p.b, [[0.0, 0.0], [0.0, 0.0]]);
+    for (omega, zeta) in [(5.0, 0.0), (5.0, 0.05), (200.0, 0.9)] {
+        for h in [1e-12, 1e-9, 1e-7] {
+            let p = Propagator::new(omega, zeta, h);
+            let wh = omega * h;
+            // Leading terms of the exact series, with the first correction.
+            assert!(rel(p.a[0][0], 1.0 - wh * wh / 2.0) < 1e-15);
+            assert!(rel(p.a[0][1], h * (1.0 - zeta * wh)) < 1e-14);
+            assert!(rel(p.a[1][0], -omega * wh * (1.0 - zeta * wh)) < 1e-14);
+            assert!(rel(p.a[1][1], 1.0 - 2.0 * zeta * wh) < 1e-14);
+            assert!(rel(p.b[0][0], h * h / 3.0 * (1.0 - zeta * wh / 2.0)) < 1e-12);
+            assert!(rel(p.b[0][1], h * h / 6.0 * (1.0 - zeta * wh / 2.0)) < 1e-12);
+            assert!(rel(p.b[1][0], h / 2.0 * (1.0 - 2.0 * zeta * wh / 3.0)) < 1e-12);
+            assert!(rel(p.b[1][1], h / 2.0 * (1.0 - zeta * wh / 3.0)) < 1e-12);
+        }
+    }
+}
+
+#[test]
+fn propagator_continuous_across_series_switch() {
+    // The propagator switches formulation near ωh = 0.5; both sides must agree.
+    for zeta in [0.0, 0.05, 0.9] {
+        let omega = 10.0;
+        let h0 = 0.5 / omega;
+        let lo = Propagator::new(omega, zeta, h0 * (1.0 - 1e-9));
+        let hi = Propagator::new(omega, zeta, h0 * (1.0 + 1e-9));
+        for i in 0..2 {
+            for j in 0..2 {
+                assert!(rel(lo.a[i][j], hi.a[i][j]) < 1e-8, "a[{i}][{j}]");
+                assert!(rel(lo.b[i][j], hi.b[i][j]) < 1e-8, "b[{i}][{j}]");
+            }
+        }
+    }
+}
+
+#[test]
+fn undamped_free_vibration_conserves_energy_and_phase() {
+    let omega = 2.0 * std::f64::consts::PI / 1.3;
+    for h in [1e-3, 0.005, 0.21] {
+        let p = Propagator::new(omega, 0.0, h);
+        let (x0, v0) = (0.02, -0.15);
+        let energy = |x: f64, v: f64| 0.5 * v * v + 0.5 * omega * omega * x * x;
+        let e0 = energy(x0, v0);
+        let (mut x, mut v) = (x0, v0);
+        let steps = 100_000;
+        for _ in 0..steps {
+            (x, v) = p.step(x, v, 0.0, 0.0);
+        }
+        assert!(
+            rel(energy(x, v), e0) < 1e-10,
+            "h {h}: energy drift {:e}",
+            rel(energy(x, v), e0)
+        );
+        let t = steps as f64 * h;
+        let (s, c) = (omega * t).sin_cos();
+        let xe = x0 * c + v0 / omega * s;
+        let amp = (2.0 * e0).sqrt() / omega;
+        assert!((x - xe).abs() < 1e-9 * amp, "h {h}: x {x} vs {xe}");
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Spectra
+// ---------------------------------------------------------------------------------------
+
+/// Peak |x| at the record samples by RK4 with `sub` substeps per record interval.
+fn rk4_sd(gm: &GroundMotion, omega: f64, zeta: f64, sub: usize) -> f64 {
+    let (mut x, mut v, mut peak) = (0.0f64, 0.0f64, 0.0f64);
+    for w in gm.accel.windows(2) {
+        (x, v) = rk4(omega, zeta, gm.dt, sub, x, v, -w[0], -w[1]);
+        peak = peak.max(x.abs());
+    }
+    peak
+}
+
+#[test]
+fn spectrum_matches_fine_rk4_for_ramp_and_sine() {
+    let dt = 0.02;
+    // A ramp up then down (triangle pulse) followed by zeros, and a coarse sine.
+    let ramp: Vec<f64> = (0..150)
+        .map(|i| {
+            if i <= 25 {
+                i as f64 * 0.1
+            } else if i <= 50 {
+                (50 - i) as f64 * 0.1
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let sine: Vec<f64> = (0..200)
+        .map(|i| 3.0 * (2.0 * std::f64::consts::PI * i as f64 * dt / 0.45).sin())
+        .collect();
+    let periods = [0.05, 0.1, 0.3, 0.45, 1.0, 2.5];
+    for (name, acc) in [("ramp", ramp), ("sine", sine)] {
+        let gm = GroundMotion::new(name, dt, acc).unwrap();
+        for zeta in [0.0, 0.05] {
+            let sp = response_spectrum(&gm, &periods, zeta);
+            assert_eq!(sp.len(), periods.len());
+            for p in &sp {
+                let omega = 2.0 * std::f64::consts::PI / p.period;
+                let reference = rk4_sd(&gm, omega, zeta, 200);
+                assert!(
+                    rel(p.sd, reference) < 1e-6,
+                    "{name} zeta {zeta} T {}: {} vs {reference}",
+                    p.period,
+                    p.sd
+                );
+                assert!(rel(p.psv, omega * p.sd) < 1e-15);
+                assert!(rel(p.psa, omega * omega * p.sd) < 1e-15);
+            }
+        }
+    }
+}
+
+#[test]
+fn cap000_spectrum() {
+    let gm = GroundMotion::load(&record("RSN752_LOMAP_CAP000.AT2"), &RecordFormat::At2).unwrap();
+    let sp = response_spectrum(&gm, &[0.0, 1.0], 0.05);
+    assert_eq!(sp[0].sd, 0.0);
+    assert_eq!(sp[0].psa, gm.pga());
+    let p = sp[1];
+    assert!(p.sd.is_finite() && p.sd > 0.0);
+    assert!(p.psa.is_finite() && p.psa > 0.0);
+    // Physically sensible for a 0.53 g record: 0.1 g < PSA(1 s) < 3 g.
+    assert!(
+        p.psa > 0.1 * G && p.psa < 3.0 * G,
+        "PSA(1 s) = {} g",
+        p.psa / G
+    );
+    // Spot check against a fine RK4 on the real record.
+    let omega = 2.0 * std::f64::consts::PI;
+    assert!(rel(p.sd, rk4_sd(&gm, omega, 0.05, 20)) < 1e-7);
+    // Very short period: PSA → PGA.
+    let short = response_spectrum(&gm, &[0.005], 0.05)[0];
+    assert!(
+        rel(short.psa, gm.pga()) < 0.05,
+        "{} vs {}",
+        short.psa,
+        gm.pga()
+    );
+}
+
+#[test]
+fn default_periods_shape() {
+    let p = default_periods();
+    assert!(p.len() >= 90 && p.len() <= 110);
+    assert!(rel(p[0], 0.02) < 1e-12);
+    assert!(rel(*p.last().unwrap(), 10.0) < 1e-12);
+    let r0 = p[1] / p[0];
+    for w in p.windows(2) {
+        assert!(w[1] > w[0]);
+        assert!(rel(w[1] / w[0], r0) < 1e-9);
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Robustness
+// ---------------------------------------------------------------------------------------
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 512, ..ProptestConfig::default() })]
+
+    #[test]
+    fn parsers_never_panic_on_arbitrary_text(s in any::<String>()) {
+        let _ = GroundMotion::from_at2_str(&s, "p.AT2");
+        let _ = GroundMotion::from_two_column_str(&s, "p.txt", Units::G);
+        let _ = GroundMotion::from_one_column_str(&s, "p.txt", 0.01, Units::G);
+    }
+
+    #[test]
+    fn parsers_never_panic_on_record_like_text(
+        line4 in prop_oneof![
+            Just("NPTS= 3, DT= 0.01 SEC".to_string()),
+            Just("3 0.01 NPTS, DT".to_string()),
+            "[0-9 .,=A-Za-z-]{0,30}",
+        ],
+        body in "[0-9eE.+\\- \\t\\r\\n,#xa-z]{0,200}",
+    ) {
+        let text = format!("{HEAD}{line4}\n{body}");
+        let _ = GroundMotion::from_at2_str(&text, "p.AT2");
+        let _ = GroundMotion::from_two_column_str(&body, "p.txt", Units::G);
+        let _ = GroundMotion::from_one_column_str(&body, "p.txt", 0.01, Units::CentimetersPerSecond2);
+        if let Ok(gm) = GroundMotion::from_at2_str(&text, "p.AT2") {
+            prop_assert!(gm.npts() >= 2 && gm.dt > 0.0 && gm.accel.iter().all(|a| a.is_finite()));
+            let _ = (gm.pgv(), gm.pgd(), gm.accel_at(0.013));
+        }
+    }
+}

@@ -1,0 +1,266 @@
+//! `pound`: seismic pounding of adjacent buildings, two ways.
+//!
+//! Exit codes: 0 success; 2 bad input (scene, record, arguments); 3 a solver could not go on;
+//! 1 anything else (for example an output file that cannot be written).
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::{Context, Result};
+use clap::{Args, Parser, Subcommand, ValueEnum};
+
+use solvers::{History, Method};
+use structure::ground::spectrum::{default_periods, response_spectrum};
+use structure::{GroundMotion, RecordFormat, Scene, Units};
+use studies::{io, report};
+
+#[derive(Parser)]
+#[command(
+    name = "pound",
+    version,
+    about = "Seismic pounding of adjacent buildings: modal momentum method vs gap element"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Frequencies, periods, effective modal masses and contact flexibility fractions r_N.
+    Modes {
+        /// Scene file (TOML).
+        scene: PathBuf,
+        /// Override a scene value: PATH=VALUE on a dotted TOML path (repeatable).
+        #[arg(long = "set", value_name = "PATH=VALUE")]
+        set: Vec<String>,
+        /// Print JSON instead of a table.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Facts about a ground-motion record: npts, dt, duration, PGA, PGV, PGD.
+    Record {
+        #[command(flatten)]
+        record: RecordArgs,
+        /// Print JSON instead of a table.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Elastic response spectrum (exact for piecewise-linear excitation).
+    Spectrum {
+        #[command(flatten)]
+        record: RecordArgs,
+        /// Damping ratio (dimensionless).
+        #[arg(long, default_value_t = 0.05)]
+        damping: f64,
+        /// Scale the record to this peak ground acceleration first (g).
+        #[arg(long)]
+        pga: Option<f64>,
+        /// Comma-separated periods (s); default: 100 log-spaced periods from 0.02 to 10 s.
+        #[arg(long, value_delimiter = ',')]
+        periods: Option<Vec<f64>>,
+        /// Write CSV here (columns period_s,sd_m,psv_m_per_s,psa_g) instead of stdout.
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+    /// Run one analysis of a scene with either method.
+    Run {
+        /// Scene file (TOML).
+        scene: PathBuf,
+        /// Contact treatment: the paper's modal momentum method or the gap element.
+        #[arg(long, value_enum)]
+        method: MethodArg,
+        /// Override a scene value: PATH=VALUE on a dotted TOML path (repeatable).
+        #[arg(long = "set", value_name = "PATH=VALUE")]
+        set: Vec<String>,
+        /// Write the full result as JSON here (otherwise a summary is printed).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Write floor displacements and story shears over time as CSV here.
+        #[arg(long)]
+        history: Option<PathBuf>,
+    },
+}
+
+#[derive(Args)]
+struct RecordArgs {
+    /// Record file: PEER AT2 (units g), two-column time/acceleration, or one-column.
+    record: PathBuf,
+    /// File format; default: at2 for *.at2 files, two-column otherwise.
+    #[arg(long, value_enum)]
+    format: Option<FormatArg>,
+    /// Time step of a one-column record (s).
+    #[arg(long)]
+    dt: Option<f64>,
+    /// Units of a two- or one-column record: g, m/s^2 or cm/s^2.
+    #[arg(long, default_value = "g")]
+    units: String,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum FormatArg {
+    At2,
+    TwoColumn,
+    OneColumn,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum MethodArg {
+    Momentum,
+    Gap,
+}
+
+/// An error caused by the user's input (exit code 2).
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+struct InputError(String);
+
+fn input<E: std::fmt::Display>(e: E) -> anyhow::Error {
+    anyhow::Error::new(InputError(e.to_string()))
+}
+
+fn load_record(a: &RecordArgs) -> Result<GroundMotion> {
+    let units: Units = a.units.parse().map_err(|_| {
+        input(format!(
+            "--units `{}`: expected g, m/s^2 or cm/s^2",
+            a.units
+        ))
+    })?;
+    let is_at2 = a
+        .record
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("at2"));
+    let format = match (a.format, a.dt) {
+        (Some(FormatArg::At2), _) => RecordFormat::At2,
+        (Some(FormatArg::OneColumn), None) => {
+            return Err(input("a one-column record needs --dt (s)"))
+        }
+        (Some(FormatArg::OneColumn), Some(dt)) | (None, Some(dt)) => {
+            RecordFormat::OneColumn { dt, units }
+        }
+        (Some(FormatArg::TwoColumn), _) => RecordFormat::TwoColumn { units },
+        (None, None) if is_at2 => RecordFormat::At2,
+        (None, None) => RecordFormat::TwoColumn { units },
+    };
+    if let RecordFormat::OneColumn { dt, .. } = format {
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(input(format!("--dt {dt}: expected a time step > 0 (s)")));
+        }
+    }
+    GroundMotion::load(&a.record, &format).map_err(input)
+}
+
+fn load_scene(path: &Path, set: &[String]) -> Result<Scene> {
+    Scene::from_file_with_overrides(path, set).map_err(input)
+}
+
+fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Modes { scene, set, json } => {
+            let scene = load_scene(&scene, &set)?;
+            if json {
+                println!(
+                    "{}",
+                    serde_json::to_string_pretty(&report::modes_json(&scene).map_err(input)?)?
+                );
+            } else {
+                print!("{}", report::modes_table(&scene).map_err(input)?);
+            }
+        }
+        Command::Record { record, json } => {
+            let gm = load_record(&record)?;
+            if json {
+                println!(
+                    "{}",
+                    serde_json::to_string_pretty(&report::record_json(&gm))?
+                );
+            } else {
+                print!("{}", report::record_table(&gm));
+            }
+        }
+        Command::Spectrum {
+            record,
+            damping,
+            pga,
+            periods,
+            out,
+        } => {
+            if !(damping.is_finite() && (0.0..1.0).contains(&damping)) {
+                return Err(input(format!(
+                    "--damping {damping}: expected 0 <= ratio < 1"
+                )));
+            }
+            let mut gm = load_record(&record)?;
+            if let Some(p) = pga {
+                if !(p.is_finite() && p > 0.0) {
+                    return Err(input(format!(
+                        "--pga {p}: expected a peak ground acceleration > 0 (g)"
+                    )));
+                }
+                gm = gm.scaled_to_pga(p);
+            }
+            let periods = periods.unwrap_or_else(default_periods);
+            if let Some(t) = periods.iter().find(|t| !(t.is_finite() && **t >= 0.0)) {
+                return Err(input(format!("--periods: {t} is not a period >= 0 (s)")));
+            }
+            let mut csv = String::from("period_s,sd_m,psv_m_per_s,psa_g\n");
+            for p in response_spectrum(&gm, &periods, damping) {
+                csv.push_str(&format!(
+                    "{},{:.9e},{:.9e},{:.9e}\n",
+                    p.period,
+                    p.sd,
+                    p.psv,
+                    p.psa / structure::G
+                ));
+            }
+            match out {
+                Some(path) => io::write_atomic(&path, csv.as_bytes())?,
+                None => print!("{csv}"),
+            }
+        }
+        Command::Run {
+            scene: path,
+            method,
+            set,
+            out,
+            history,
+        } => {
+            let scene = load_scene(&path, &set)?;
+            let method = match method {
+                MethodArg::Momentum => Method::Momentum,
+                MethodArg::Gap => Method::Gap,
+            };
+            let mut hist = history.as_ref().map(|_| History::default());
+            let result = solvers::run(&scene, method, hist.as_mut())
+                .with_context(|| format!("{}: {method} analysis failed", path.display()))?;
+            if let (Some(p), Some(h)) = (&history, &hist) {
+                io::write_atomic(p, io::history_csv(&scene, h).as_bytes())?;
+            }
+            match out {
+                Some(p) => io::write_run(&p, &result)?,
+                None => print!("{}", report::run_summary(&scene, &result)),
+            }
+        }
+    }
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            if e.downcast_ref::<InputError>().is_some() {
+                ExitCode::from(2)
+            } else if e
+                .chain()
+                .any(|c| c.downcast_ref::<solvers::SolverError>().is_some())
+            {
+                ExitCode::from(3)
+            } else {
+                ExitCode::from(1)
+            }
+        }
+    }
+}

@@ -1,0 +1,182 @@
+//! Human-readable tables for the command line.
+
+use solvers::RunOutput;
+use structure::{GroundMotion, Scene};
+
+/// `pound modes` table.
+pub fn modes_table(scene: &Scene) -> Result<String, structure::ModelError> {
+    let mut s = String::new();
+    for b in &scene.buildings {
+        let m = b.modes()?;
+        let f = m.frequencies_hz();
+        let t = m.periods();
+        let e = m.effective_mass_ratios();
+        s.push_str(&format!(
+            "{} ({} floors, total mass {:.4e} kg)\n",
+            b.name,
+            b.n_floors(),
+            b.total_mass()
+        ));
+        s.push_str("  mode   f (Hz)   paper (Hz)   diff (%)   T (s)    eff. mass   cumul.\n");
+        let mut cum = 0.0;
+        for i in 0..m.n_modes() {
+            cum += e[i];
+            let (p, d) = match b.reference_frequencies_hz.get(i) {
+                Some(r) => (
+                    format!("{r:10.3}"),
+                    format!("{:+9.4}", 100.0 * (f[i] - r) / r),
+                ),
+                None => (format!("{:>10}", "-"), format!("{:>9}", "")),
+            };
+            s.push_str(&format!(
+                "  {:4} {:8.4} {} {} {:8.4} {:10.4} {:8.4}\n",
+                i + 1,
+                f[i],
+                p,
+                d,
+                t[i],
+                e[i],
+                cum
+            ));
+        }
+    }
+    for (ci, c) in scene.contacts.iter().enumerate() {
+        let (bl, br) = (&scene.buildings[c.left], &scene.buildings[c.right]);
+        let rl = bl.modes()?.contact_flexibility(c.left_dof);
+        let rr = br.modes()?.contact_flexibility(c.right_dof);
+        s.push_str(&format!(
+            "contact {ci}: {} floor {} <-> {} floor {}, gap {} m, c_r {}\n  r_N (contact flexibility fraction kept by N modes)\n  N     left     right\n",
+            bl.name,
+            c.left_dof + 1,
+            br.name,
+            c.right_dof + 1,
+            c.gap,
+            c.restitution
+        ));
+        for n in 0..rl.len().max(rr.len()) {
+            let g = |r: &Vec<f64>| {
+                r.get(n)
+                    .map_or("      -".to_string(), |v| format!("{v:8.4}"))
+            };
+            s.push_str(&format!("  {:<3} {} {}\n", n + 1, g(&rl), g(&rr)));
+        }
+    }
+    Ok(s)
+}
+
+/// `pound modes --json` document.
+pub fn modes_json(scene: &Scene) -> Result<serde_json::Value, structure::ModelError> {
+    let mut buildings = Vec::new();
+    for b in &scene.buildings {
+        let m = b.modes()?;
+        buildings.push(serde_json::json!({
+            "name": b.name,
+            "floors": b.n_floors(),
+            "total_mass_kg": b.total_mass(),
+            "masses_kg": b.masses,
+            "story_stiffness_n_per_m": b.story_stiffness,
+            "frequencies_hz": m.frequencies_hz(),
+            "reference_frequencies_hz": b.reference_frequencies_hz,
+            "periods_s": m.periods(),
+            "effective_mass_ratios": m.effective_mass_ratios(),
+            "participation_factors": m.participation,
+        }));
+    }
+    let mut contacts = Vec::new();
+    for c in &scene.contacts {
+        let rl = scene.buildings[c.left]
+            .modes()?
+            .contact_flexibility(c.left_dof);
+        let rr = scene.buildings[c.right]
+            .modes()?
+            .contact_flexibility(c.right_dof);
+        contacts.push(serde_json::json!({
+            "left": scene.buildings[c.left].name, "left_floor": c.left_dof + 1,
+            "right": scene.buildings[c.right].name, "right_floor": c.right_dof + 1,
+            "gap_m": c.gap, "restitution": c.restitution,
+            "r_n_left": rl, "r_n_right": rr,
+        }));
+    }
+    Ok(serde_json::json!({ "scene": scene.name, "buildings": buildings, "contacts": contacts }))
+}
+
+/// Peak ground velocity and displacement alongside the basic record facts.
+pub fn record_json(gm: &GroundMotion) -> serde_json::Value {
+    serde_json::json!({
+        "name": gm.name,
+        "npts": gm.npts(),
+        "dt_s": gm.dt,
+        "duration_s": gm.duration(),
+        "pga_g": gm.pga() / structure::G,
+        "pga_m_per_s2": gm.pga(),
+        "pgv_m_per_s": gm.pgv(),
+        "pgd_m": gm.pgd(),
+    })
+}
+
+/// `pound record` table.
+pub fn record_table(gm: &GroundMotion) -> String {
+    format!(
+        "record    {}\nnpts      {}\ndt        {} s\nduration  {:.3} s\nPGA       {:.4} g ({:.4} m/s^2)\nPGV       {:.4} m/s\nPGD       {:.4} m\n",
+        gm.name,
+        gm.npts(),
+        gm.dt,
+        gm.duration(),
+        gm.pga() / structure::G,
+        gm.pga(),
+        gm.pgv(),
+        gm.pgd()
+    )
+}
+
+/// Summary of a run for stdout.
+pub fn run_summary(scene: &Scene, run: &RunOutput) -> String {
+    let mut s = format!(
+        "{} — method {} ({})\n",
+        scene.name, run.method, run.settings
+    );
+    for b in &run.buildings {
+        s.push_str(&format!(
+            "{}\n  story  shear max (MN)  floor disp max (m)\n",
+            b.name
+        ));
+        for j in (0..b.story_shear_max.len()).rev() {
+            s.push_str(&format!(
+                "  {:5} {:16.4} {:19.5}\n",
+                j + 1,
+                b.story_shear_max[j] / 1e6,
+                b.floor_displacement_max[j]
+            ));
+        }
+    }
+    s.push_str(&format!("impacts: {}", run.impacts.len()));
+    if let (Some(first), Some(last)) = (run.impacts.first(), run.impacts.last()) {
+        s.push_str(&format!(
+            " (first at {:.4} s, last at {:.4} s)",
+            first.time, last.time
+        ));
+    }
+    s.push('\n');
+    for p in &run.persistent_contacts {
+        s.push_str(&format!(
+            "persistent contact {}: {:.4} … {:.4} s ({})\n",
+            p.contact, p.start, p.end, p.released_by
+        ));
+    }
+    let e = &run.energy;
+    s.push_str(&format!(
+        "energy (J): initial {:.4e}, input {:.4e}, damping {:.4e}, contact {:.4e}, final {:.4e}, balance error {:.3e}\n",
+        e.initial, e.input, e.damping, e.contact, e.final_, e.balance_error
+    ));
+    let st = &run.stats;
+    s.push_str(&format!(
+        "stats: {} steps ({} rejected), {} events, {} impacts, {} root iterations, {:.3} ms\n",
+        st.steps,
+        st.rejected_steps,
+        st.events,
+        st.impacts,
+        st.root_iterations,
+        st.wall_seconds * 1e3
+    ));
+    s
+}
