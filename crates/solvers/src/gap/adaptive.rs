@@ -1,0 +1,467 @@
+//! The adaptive gap-element integrator: Dormand–Prince 5(4) with located contact events.
+//!
+//! State y = [u (n); v (n); E_input; E_damping; W_contact; impulse_c (one per contact)].
+//! The last 3 + n_c components are quadratures integrated with the same stages (they do not
+//! enter the error norm), so the energy audit and the impulses are exactly consistent with
+//! the integrated motion. Tolerances: rtol = `gap_element.tolerance`, atol = rtol·1e-3 m on
+//! displacements and rtol·1e-3 m/s on velocities.
+//!
+//! Step loop:
+//! 1. The step is cut to the next record point (t = i·dt), so the ground acceleration is one
+//!    linear piece inside every step, and while a contact is closed to 1/8 of its contact
+//!    period 2π/ω_c (ω_c = √(k/m_eff); Hertz: tangent value at the elastic peak).
+//! 2. Contact modes (open/closed, approach speed at closure) are frozen during a trial step; a
+//!    rejected step changes nothing.
+//! 3. After an accepted step each contact's event function g (law.rs) is sampled on the dense
+//!    output at θ = ¼, ½, ¾, 1; an interior extremum of δ (δ̇ changing sign between samples,
+//!    located by Brent) is checked too, so a closure that opens again inside the step is not
+//!    missed. The earliest sign change is located by Brent on the interpolant; the step is
+//!    cut there (state from the dense output), the contact flips, and f is re-evaluated
+//!    (FSAL restarts).
+//! 4. Peak penetration and peak force of an episode are located on the dense output too
+//!    (roots of δ̇ and of dF/dt = F_δ δ̇ + F_δ̇ δ̈).
+
+use roots::Convergency;
+use structure::Scene;
+
+use super::dopri::Dopri5;
+use super::{audit, Episode, Mode, Segment, StormGuard, System};
+use crate::response::ResponseTracker;
+use crate::{History, Impact, RunOutput, SolverError, Stats};
+
+/// Samples per step for the event search.
+const EVENT_SAMPLES: usize = 4;
+/// Fraction of the contact period allowed per step while a contact is closed.
+const CONTACT_STEP_FRACTION: f64 = 1.0 / 8.0;
+/// Root tolerance in θ (fraction of the step).
+const THETA_TOL: f64 = 1e-14;
+
+struct Conv {
+    xtol: f64,
+    max_iter: usize,
+}
+
+impl Convergency<f64> for Conv {
+    fn is_root_found(&mut self, y: f64) -> bool {
+        y == 0.0
+    }
+    fn is_converged(&mut self, a: f64, b: f64) -> bool {
+        (a - b).abs() <= self.xtol
+    }
+    fn is_iteration_limit_reached(&mut self, iter: usize) -> bool {
+        iter >= self.max_iter
+    }
+}
+
+/// Brent on [a, b]; `calls` counts evaluations. Without a sign change returns `a`.
+fn locate(mut f: impl FnMut(f64) -> f64, a: f64, b: f64, calls: &mut u64) -> f64 {
+    let mut conv = Conv {
+        xtol: THETA_TOL,
+        max_iter: 200,
+    };
+    let g = |x: f64| {
+        *calls += 1;
+        f(x)
+    };
+    match roots::find_root_brent(a, b, g, &mut conv) {
+        Ok(x) => x.clamp(a, b),
+        Err(roots::SearchError::NoBracketing) => a,
+        Err(_) => 0.5 * (a + b),
+    }
+}
+
+/// Right-hand side with the contact modes frozen.
+#[inline]
+fn rhs(sys: &System, seg: &Segment, modes: &[Mode], t: f64, y: &[f64], o: &mut [f64]) {
+    let n = sys.n;
+    let (u, rest) = y.split_at(n);
+    let v = &rest[..n];
+    let (ou, orest) = o.split_at_mut(n);
+    ou.copy_from_slice(v);
+    let (acc, extra) = orest.split_at_mut(n);
+    let pdamp = sys.internal(u, v, acc);
+    let ag = seg.at(t);
+    let mut pin = 0.0;
+    for i in 0..n {
+        let f = sys.mass[i] * ag;
+        acc[i] -= f;
+        pin -= f * v[i];
+    }
+    let mut pc = 0.0;
+    for (ci, c) in sys.contacts.iter().enumerate() {
+        let m = modes[ci];
+        if m.closed {
+            let d = u[c.l] - u[c.r] - c.gap;
+            let dd = v[c.l] - v[c.r];
+            let f = c.law.force(d, dd, m.v_close);
+            acc[c.l] -= f;
+            acc[c.r] += f;
+            pc += f * dd;
+            extra[3 + ci] = f;
+        } else {
+            extra[3 + ci] = 0.0;
+        }
+    }
+    for i in 0..n {
+        acc[i] *= sys.inv_mass[i];
+    }
+    extra[0] = pin;
+    extra[1] = pdamp;
+    extra[2] = pc;
+}
+
+/// δ, δ̇, δ̈ of contact `c` on the dense output.
+#[inline]
+fn kin(dp: &Dopri5, n: usize, l: usize, r: usize, gap: f64, th: f64) -> (f64, f64) {
+    (
+        dp.dense(l, th) - dp.dense(r, th) - gap,
+        dp.dense(n + l, th) - dp.dense(n + r, th),
+    )
+}
+
+pub(crate) fn run(
+    scene: &Scene,
+    sys: &System,
+    mut history: Option<&mut History>,
+) -> Result<RunOutput, SolverError> {
+    let n = sys.n;
+    let nc = sys.contacts.len();
+    let dim = 2 * n + 3 + nc;
+    let (e_in, e_damp, e_work, imp0) = (2 * n, 2 * n + 1, 2 * n + 2, 2 * n + 3);
+    let tol = scene.gap_element.tolerance;
+    let mut dp = Dopri5::new(dim, 2 * n, tol, vec![tol * 1e-3; 2 * n]);
+    let duration = scene.duration;
+    let limits = &scene.limits;
+
+    let mut y = vec![0.0; dim];
+    y[..n].copy_from_slice(&sys.u0);
+    y[n..2 * n].copy_from_slice(&sys.v0);
+    let mut modes = vec![Mode::default(); nc];
+    let mut episodes = vec![Episode::default(); nc];
+    let mut caps = vec![f64::INFINITY; nc];
+    let mut impacts: Vec<Impact> = Vec::new();
+    let mut storm = StormGuard::new(limits.max_impact_rate, duration);
+    let mut stats = Stats {
+        min_step: f64::INFINITY,
+        ..Stats::default()
+    };
+
+    let open_episode = |ci: usize,
+                        t: f64,
+                        y: &[f64],
+                        modes: &mut [Mode],
+                        episodes: &mut [Episode],
+                        caps: &mut [f64]| {
+        let c = &sys.contacts[ci];
+        let d = y[c.l] - y[c.r] - c.gap;
+        let dd = y[n + c.l] - y[n + c.r];
+        modes[ci] = Mode {
+            closed: true,
+            v_close: dd,
+        };
+        episodes[ci] = Episode {
+            t_close: t,
+            v_before: dd,
+            impulse0: y[imp0 + ci],
+            peak_force: c.law.force(d, dd, dd).max(0.0),
+            max_pen: d.max(0.0),
+        };
+        caps[ci] = CONTACT_STEP_FRACTION * 2.0 * std::f64::consts::PI / c.law.contact_omega(dd);
+    };
+
+    for (ci, c) in sys.contacts.iter().enumerate() {
+        let d = y[c.l] - y[c.r] - c.gap;
+        let dd = y[n + c.l] - y[n + c.r];
+        if c.law.event(d, dd) > 0.0 {
+            open_episode(ci, 0.0, &y, &mut modes, &mut episodes, &mut caps);
+            stats.impacts += 1;
+        }
+    }
+    let stored0 = sys.stored(&y, |i| modes[i].closed);
+    let initial = sys.mech_energy(&y[..n], &y[n..2 * n]) + stored0;
+
+    let mut tracker = ResponseTracker::new(scene);
+    sys.observe(&mut tracker, &y[..n]);
+    tracker.sample(0.0, history.as_deref_mut());
+
+    let n_int = sys.n_intervals(duration);
+    let bp = |i: usize| {
+        if i + 1 >= n_int {
+            duration
+        } else {
+            (i + 1) as f64 * sys.sample_dt
+        }
+    };
+    let mut interval = 0usize;
+    let mut seg = sys.segment(0);
+    let mut t = 0.0f64;
+
+    rhs(sys, &seg, &modes, t, &y, &mut dp.k[0]);
+    stats.rhs_evaluations += 1;
+    let mut h = {
+        let mut f = |tt: f64, yy: &[f64], o: &mut [f64]| rhs(sys, &seg, &modes, tt, yy, o);
+        let cap0 = caps.iter().cloned().fold(f64::INFINITY, f64::min);
+        dp.initial_step(&mut f, t, &y.clone(), (bp(0) - t).min(cap0))
+    };
+    stats.rhs_evaluations += 1;
+    let mut rejected_before = false;
+    let mut total_steps: u64 = 0;
+    let mut scratch = vec![0.0; dim];
+
+    while interval < n_int {
+        let t_bp = bp(interval);
+        let cap = caps
+            .iter()
+            .zip(&modes)
+            .filter(|(_, m)| m.closed)
+            .map(|(c, _)| *c)
+            .fold(f64::INFINITY, f64::min);
+        let mut hs = h.min(cap);
+        let mut land = false;
+        if t + 1.01 * hs >= t_bp {
+            hs = t_bp - t;
+            land = true;
+        }
+        total_steps += 1;
+        if total_steps > limits.max_steps {
+            return Err(SolverError::StepBudget {
+                time: t,
+                steps: total_steps - 1,
+                limit: limits.max_steps,
+            });
+        }
+        let err = {
+            let mut f = |tt: f64, yy: &[f64], o: &mut [f64]| rhs(sys, &seg, &modes, tt, yy, o);
+            dp.try_step(&mut f, t, &y, hs)
+        };
+        stats.rhs_evaluations += 6;
+        let (ok, hnew) = dp.control(err, hs, rejected_before);
+        if !ok {
+            stats.rejected_steps += 1;
+            rejected_before = true;
+            h = hnew;
+            let hmin = 1e-14 * (1.0 + t);
+            if h < hmin {
+                let closed: Vec<usize> = (0..nc).filter(|&i| modes[i].closed).collect();
+                if err.is_nan() {
+                    return Err(SolverError::NonFinite {
+                        time: t,
+                        context: format!("the trial step of {hs:.3e} s produced a non-finite state (closed contacts: {closed:?})"),
+                    });
+                }
+                return Err(SolverError::StepSizeUnderflow {
+                    time: t,
+                    step: h,
+                    min_step: hmin,
+                    context: format!(
+                        "error norm {err:.3e} after {} rejections; closed contacts: {closed:?}",
+                        stats.rejected_steps
+                    ),
+                });
+            }
+            continue;
+        }
+        rejected_before = false;
+        dp.prepare_dense(t, &y, hs);
+
+        // --- event search -------------------------------------------------------------
+        let mut event: Option<(f64, usize)> = None;
+        for (ci, c) in sys.contacts.iter().enumerate() {
+            let closed = modes[ci].closed;
+            let law = &c.law;
+            let (l, r, gap) = (c.l, c.r, c.gap);
+            let g_at = |th: f64| {
+                let (d, dd) = kin(&dp, n, l, r, gap, th);
+                law.event(d, dd)
+            };
+            let (_, mut dd_a) = kin(&dp, n, l, r, gap, 0.0);
+            let mut th_a = 0.0;
+            let mut bracket: Option<(f64, f64)> = None;
+            for j in 1..=EVENT_SAMPLES {
+                let th_b = j as f64 / EVENT_SAMPLES as f64;
+                if let Some((te, _)) = event {
+                    if th_a >= te {
+                        break;
+                    }
+                }
+                let (d_b, dd_b) = kin(&dp, n, l, r, gap, th_b);
+                let g_b = law.event(d_b, dd_b);
+                if !closed {
+                    if g_b > 0.0 {
+                        bracket = Some((th_a, th_b));
+                    } else if dd_a > 0.0 && dd_b < 0.0 {
+                        let tm = locate(
+                            |th| kin(&dp, n, l, r, gap, th).1,
+                            th_a,
+                            th_b,
+                            &mut stats.root_iterations,
+                        );
+                        if g_at(tm) > 0.0 {
+                            bracket = Some((th_a, tm));
+                        }
+                    }
+                } else if g_b < 0.0 {
+                    bracket = Some((th_a, th_b));
+                } else if !law.force_event() && dd_a < 0.0 && dd_b > 0.0 {
+                    let tm = locate(
+                        |th| kin(&dp, n, l, r, gap, th).1,
+                        th_a,
+                        th_b,
+                        &mut stats.root_iterations,
+                    );
+                    if g_at(tm) < 0.0 {
+                        bracket = Some((th_a, tm));
+                    }
+                }
+                if bracket.is_some() {
+                    break;
+                }
+                th_a = th_b;
+                dd_a = dd_b;
+            }
+            if let Some((a, b)) = bracket {
+                let th = locate(g_at, a, b, &mut stats.root_iterations);
+                if event.map_or(true, |(te, _)| th < te) {
+                    event = Some((th, ci));
+                }
+            }
+        }
+
+        // --- peaks of closed contacts over the part of the step actually taken -----------
+        let th_end = event.map_or(1.0, |(th, _)| th);
+        for (ci, c) in sys.contacts.iter().enumerate() {
+            if !modes[ci].closed {
+                continue;
+            }
+            let (l, r, gap, law, vc) = (c.l, c.r, c.gap, &c.law, modes[ci].v_close);
+            let ep = &mut episodes[ci];
+            let force_rate = |th: f64| {
+                let (d, dd) = kin(&dp, n, l, r, gap, th);
+                let ddd = dp.dense_rate(n + l, th) - dp.dense_rate(n + r, th);
+                let (kd, kv) = law.tangent(d, dd, vc);
+                kd * dd + kv * ddd
+            };
+            let mut th_a = 0.0;
+            let (_, mut dd_a) = kin(&dp, n, l, r, gap, 0.0);
+            let mut fr_a = force_rate(0.0);
+            for j in 1..=EVENT_SAMPLES {
+                let th_b = th_end * j as f64 / EVENT_SAMPLES as f64;
+                let (d_b, dd_b) = kin(&dp, n, l, r, gap, th_b);
+                ep.max_pen = ep.max_pen.max(d_b);
+                ep.peak_force = ep.peak_force.max(law.force(d_b, dd_b, vc));
+                if dd_a > 0.0 && dd_b <= 0.0 {
+                    let tm = locate(
+                        |th| kin(&dp, n, l, r, gap, th).1,
+                        th_a,
+                        th_b,
+                        &mut stats.root_iterations,
+                    );
+                    let (d, dd) = kin(&dp, n, l, r, gap, tm);
+                    ep.max_pen = ep.max_pen.max(d);
+                    ep.peak_force = ep.peak_force.max(law.force(d, dd, vc));
+                }
+                let fr_b = force_rate(th_b);
+                if law.kind != structure::scene::ContactLaw::Linear && fr_a > 0.0 && fr_b <= 0.0 {
+                    let tm = locate(force_rate, th_a, th_b, &mut stats.root_iterations);
+                    let (d, dd) = kin(&dp, n, l, r, gap, tm);
+                    ep.peak_force = ep.peak_force.max(law.force(d, dd, vc));
+                }
+                th_a = th_b;
+                dd_a = dd_b;
+                fr_a = fr_b;
+            }
+        }
+
+        let t_old = t;
+        match event {
+            Some((th, ci)) => {
+                dp.dense_all(th, &mut scratch);
+                y.copy_from_slice(&scratch);
+                t = if th >= 1.0 { t + hs } else { t + th * hs };
+                if land && th >= 1.0 {
+                    t = t_bp;
+                }
+                let c = &sys.contacts[ci];
+                if modes[ci].closed {
+                    let dd = y[n + c.l] - y[n + c.r];
+                    impacts.push(episodes[ci].impact(ci, t, dd, y[imp0 + ci]));
+                    modes[ci].closed = false;
+                    caps[ci] = f64::INFINITY;
+                } else {
+                    open_episode(ci, t, &y, &mut modes, &mut episodes, &mut caps);
+                    stats.impacts += 1;
+                    storm.closure(t, ci)?;
+                }
+                stats.events += 1;
+                rhs(sys, &seg, &modes, t, &y, &mut dp.k[0]);
+                stats.rhs_evaluations += 1;
+                sys.observe(&mut tracker, &y[..n]);
+                if !(land && t == t_bp) {
+                    tracker.sample(t, history.as_deref_mut());
+                }
+            }
+            None => {
+                dp.accept_full(&mut y);
+                t = if land { t_bp } else { t + hs };
+            }
+        }
+        let taken = t - t_old;
+        if taken > 0.0 {
+            stats.min_step = stats.min_step.min(taken);
+        }
+        stats.max_step = stats.max_step.max(taken);
+        stats.steps += 1;
+        h = hnew;
+        if land && t == t_bp {
+            sys.observe(&mut tracker, &y[..n]);
+            tracker.sample(t, history.as_deref_mut());
+            interval += 1;
+            if interval < n_int {
+                let next = sys.segment(interval);
+                // The excitation is continuous at a record point except where the record
+                // ends (a jump to zero): only then does FSAL restart with the new piece.
+                let (a_new, a_old) = (next.at(t), seg.at(t));
+                let jump = (a_new - a_old).abs() > 1e-9 * (a_new.abs() + a_old.abs());
+                seg = next;
+                if jump {
+                    rhs(sys, &seg, &modes, t, &y, &mut dp.k[0]);
+                    stats.rhs_evaluations += 1;
+                }
+            }
+        }
+    }
+
+    // Episodes still open at the end are reported up to the end of the analysis.
+    for (ci, c) in sys.contacts.iter().enumerate() {
+        if modes[ci].closed {
+            let dd = y[n + c.l] - y[n + c.r];
+            impacts.push(episodes[ci].impact(ci, t, dd, y[imp0 + ci]));
+        }
+    }
+    impacts.sort_by(|a, b| a.time.total_cmp(&b.time));
+    if stats.min_step == f64::INFINITY {
+        stats.min_step = 0.0;
+    }
+    let stored_t = sys.stored(&y, |i| modes[i].closed);
+    let energy = audit(
+        initial,
+        y[e_in],
+        y[e_damp],
+        y[e_work],
+        stored0,
+        sys.mech_energy(&y[..n], &y[n..2 * n]),
+        stored_t,
+    );
+    Ok(RunOutput {
+        method: "gap".into(),
+        settings: sys.settings(scene),
+        scene: scene.name.clone(),
+        duration,
+        buildings: tracker.finish(),
+        impacts,
+        persistent_contacts: Vec::new(),
+        energy,
+        stats,
+        r_n: Vec::new(),
+    })
+}

@@ -1,0 +1,37 @@
+//! Energy audit of the kept modes.
+//!
+//! Per mode, between events, d/dt(½q̇² + ½ω²q²) = f q̇ − 2ζω q̇². Over each segment the
+//! two integrals are evaluated independently of that identity:
+//! - input ∫ −Γ a_g q̇ dt exactly from the end states ([`super::modal::load_work`]);
+//! - damping 2ζω ∫ q̇² dt in closed form (precomputed quadratic forms for full steps,
+//!   [`super::modal::Arc::damping_integral`] for partial segments).
+//!
+//! Impacts change the kinetic energy by exactly ½Σ(q̇⁺² − q̇⁻²) (for `consistent`,
+//! ½(1−e²)v²/W per impact); that loss is `contact`. Persistent-contact forces are constant
+//! per segment and do the work λ·Δδ (zero to round-off, the contact is workless); it is
+//! added to `contact` too. balance_error = initial + input − damping − contact − final
+//! therefore measures the integration itself.
+
+use crate::EnergyAudit;
+
+/// Running sums, J.
+#[derive(Debug, Clone, Default)]
+pub struct EnergyAccount {
+    pub initial: f64,
+    pub input: f64,
+    pub damping: f64,
+    pub contact: f64,
+}
+
+impl EnergyAccount {
+    pub fn finish(&self, final_: f64) -> EnergyAudit {
+        EnergyAudit {
+            initial: self.initial,
+            input: self.input,
+            damping: self.damping,
+            contact: self.contact,
+            final_,
+            balance_error: self.initial + self.input - self.damping - self.contact - final_,
+        }
+    }
+}

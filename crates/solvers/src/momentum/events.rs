@@ -1,0 +1,184 @@
+//! Event location on the closed form (Brent, `roots` crate).
+//!
+//! Within a segment [0, τ] the gap function δ(s) = g·q(s) − gap is known in closed form
+//! ([`super::modal::Arc`]). Sub-steps are short enough (≤ T_min/8) that δ has at most one
+//! extremum per segment, so with the end values (δ₀, δ̇₀, δ₁, δ̇₁):
+//! - δ₀ < 0 ≤ δ₁: one upward crossing, Brent on δ over [0, τ];
+//! - δ₀, δ₁ < 0 with δ̇₀ > 0 > δ̇₁: an interior maximum. A rigorous filter first: the cubic
+//!   Hermite interpolant's maximum plus its error bound τ⁴/384·max|δ⁗| (with
+//!   |q_n⁗| ≤ ω_n⁴·|A_n − iB_n| for the homogeneous part) — if that is < 0 nothing closes;
+//!   otherwise Brent on δ̇ locates the maximum s*, and if δ(s*) ≥ 0 Brent on δ over [0, s*];
+//! - δ₀ ≥ 0 (touching just after an impact or a release): δ̇₀ > 0 is an immediate
+//!   (zero-speed) closure; otherwise the minimum is located first and the crossing after it.
+
+use roots::Convergency;
+
+use super::impulse::ContactGeom;
+use super::modal::{Arc, Modal};
+
+/// Brent convergence: |Δs| below `tol`, exact zero, iteration count recorded.
+pub struct Conv {
+    pub tol: f64,
+    pub iterations: usize,
+}
+
+impl Convergency<f64> for Conv {
+    fn is_root_found(&mut self, y: f64) -> bool {
+        y == 0.0
+    }
+    fn is_converged(&mut self, x1: f64, x2: f64) -> bool {
+        (x1 - x2).abs() <= self.tol
+    }
+    fn is_iteration_limit_reached(&mut self, iter: usize) -> bool {
+        self.iterations = self.iterations.max(iter);
+        iter >= 200
+    }
+}
+
+/// Closed-form evaluation of one contact over a segment.
+pub struct Locator<'a> {
+    pub contact: &'a ContactGeom,
+    pub arcs: &'a [Arc],
+    pub modal: &'a Modal,
+    /// Window [lo, hi] of the segment searched (s from the segment start).
+    pub lo: f64,
+    pub hi: f64,
+    /// Root tolerance in s (absolute): ~2ε·t.
+    pub tol: f64,
+    pub iterations: u64,
+}
+
+impl Locator<'_> {
+    fn delta(&self, s: f64) -> f64 {
+        let mut d = 0.0;
+        for (g, a) in self.contact.g.iter().zip(self.arcs) {
+            if *g != 0.0 {
+                d += g * a.xv(s).0;
+            }
+        }
+        d - self.contact.gap
+    }
+
+    fn ddelta(&self, s: f64) -> f64 {
+        let mut d = 0.0;
+        for (g, a) in self.contact.g.iter().zip(self.arcs) {
+            if *g != 0.0 {
+                d += g * a.xv(s).1;
+            }
+        }
+        d
+    }
+
+    fn brent(&mut self, a: f64, b: f64, derivative: bool) -> f64 {
+        let mut conv = Conv {
+            tol: self.tol,
+            iterations: 0,
+        };
+        let r = if derivative {
+            roots::find_root_brent(a, b, |s| self.ddelta(s), &mut conv)
+        } else {
+            roots::find_root_brent(a, b, |s| self.delta(s), &mut conv)
+        };
+        self.iterations += conv.iterations as u64 + 1;
+        match r {
+            Ok(s) => s.clamp(a, b),
+            // No bracket (round-off at an end): the end where the function is nearer zero.
+            Err(_) => {
+                let f = |s: f64| {
+                    if derivative {
+                        self.ddelta(s)
+                    } else {
+                        self.delta(s)
+                    }
+                };
+                if f(a).abs() <= f(b).abs() {
+                    a
+                } else {
+                    b
+                }
+            }
+        }
+    }
+
+    /// Upper bound of δ over the segment from the Hermite cubic and its error bound.
+    fn max_bound(&self, d0: f64, dd0: f64, d1: f64, dd1: f64) -> f64 {
+        let t = self.hi - self.lo;
+        let (c0, c1) = (d0, t * dd0);
+        let c2 = -3.0 * d0 - 2.0 * t * dd0 + 3.0 * d1 - t * dd1;
+        let c3 = 2.0 * d0 + t * dd0 - 2.0 * d1 + t * dd1;
+        let p = |u: f64| c0 + u * (c1 + u * (c2 + u * c3));
+        let mut m = d0.max(d1);
+        // roots of p'(u) = c1 + 2c2 u + 3c3 u²
+        let (qa, qb, qc) = (3.0 * c3, 2.0 * c2, c1);
+        let mut cands = vec![];
+        if qa.abs() < 1e-300 {
+            if qb != 0.0 {
+                cands.push(-qc / qb);
+            }
+        } else {
+            let disc = qb * qb - 4.0 * qa * qc;
+            if disc >= 0.0 {
+                let sq = disc.sqrt();
+                cands.push((-qb + sq) / (2.0 * qa));
+                cands.push((-qb - sq) / (2.0 * qa));
+            }
+        }
+        for u in cands {
+            if (0.0..=1.0).contains(&u) {
+                m = m.max(p(u));
+            }
+        }
+        let mut d4 = 0.0;
+        for (n, (g, a)) in self.contact.g.iter().zip(self.arcs).enumerate() {
+            let w2 = self.modal.omega[n] * self.modal.omega[n];
+            d4 += g.abs() * w2 * w2 * a.amplitude();
+        }
+        m + t.powi(4) / 384.0 * d4 * (1.0 + 1e-6) + 1e-15 * (d0.abs() + d1.abs())
+    }
+
+    /// The first closure instant s in [lo, hi], if any (see module docs); the arguments
+    /// are δ, δ̇ at lo and hi.
+    pub fn locate(&mut self, d0: f64, dd0: f64, d1: f64, dd1: f64) -> Option<f64> {
+        let (lo, tau) = (self.lo, self.hi);
+        if d0 >= 0.0 {
+            if dd0 > 0.0 {
+                return Some(lo);
+            }
+            if dd1 <= 0.0 {
+                return None;
+            }
+            let s_min = self.brent(lo, tau, true);
+            if self.delta(s_min) >= 0.0 {
+                return Some(s_min);
+            }
+            if d1 >= 0.0 {
+                return Some(self.brent(s_min, tau, false));
+            }
+            return None;
+        }
+        if d1 >= 0.0 {
+            return Some(self.brent(lo, tau, false));
+        }
+        if dd0 > 0.0 && dd1 < 0.0 {
+            if self.max_bound(d0, dd0, d1, dd1) < 0.0 {
+                return None;
+            }
+            let s_max = self.brent(lo, tau, true);
+            if self.delta(s_max) >= 0.0 {
+                return Some(self.brent(lo, s_max, false));
+            }
+        }
+        None
+    }
+
+    /// Whether the cheap tests alone prove that nothing closes (used by the fast path).
+    pub fn surely_open(&self, d0: f64, dd0: f64, d1: f64, dd1: f64) -> bool {
+        if d0 >= 0.0 || d1 >= 0.0 {
+            return false;
+        }
+        if dd0 > 0.0 && dd1 < 0.0 {
+            return self.max_bound(d0, dd0, d1, dd1) < 0.0;
+        }
+        true
+    }
+}

@@ -1,0 +1,166 @@
+//! Contact geometry in modal coordinates and the impact impulses (paper eqs 19–24).
+//!
+//! Contact c joins floor i of building L to floor j of building R. With the dense modal row
+//! g_c = (φ_L[i] on L's modes, −φ_R[j] on R's modes), the gap function and the relative
+//! (approach) velocity are δ_c = g_c·q − gap and v_c = g_c·q̇. An impulse pair P_c ≥ 0
+//! pushes the floors apart: Δq̇ = −g_c P_c, so Δv = −W P with the Delassus matrix
+//! W_ab = g_a·g_b (W_cc = Σ_kept φ_L[i]² + Σ_kept φ_R[j]²).
+//!
+//! - `consistent`: W_AA P_A = (1 + e) v_A on the active set A (a small linear
+//!   complementarity problem: solve, drop the most negative impulse, repeat). Gives
+//!   v⁺ = −e v⁻ exactly and conserves momentum (exactly with all modes).
+//! - `paper`: eqs (23)–(24) with the floor masses m_k, m_l (eq. 24 read with l for the
+//!   printed i) give the intended floor velocity jumps Δẏ; then Δq̇ = Φᵀ M Δẏ per building.
+//!   With all modes and lumped masses this equals `consistent`; with truncated modes the
+//!   contact point realises only r_N of the jump.
+
+use structure::Contact;
+
+use super::modal::Modal;
+
+/// One contact pair in modal form.
+#[derive(Debug, Clone)]
+pub struct ContactGeom {
+    pub left: usize,
+    pub right: usize,
+    pub left_dof: usize,
+    pub right_dof: usize,
+    pub gap: f64,
+    pub restitution: f64,
+    /// Dense modal row g_c (see module docs).
+    pub g: Vec<f64>,
+    /// Floor masses m_k (left), m_l (right), kg.
+    pub m_left: f64,
+    pub m_right: f64,
+}
+
+impl ContactGeom {
+    pub fn new(modal: &Modal, c: &Contact) -> ContactGeom {
+        let gl = modal.floor_row(c.left, c.left_dof);
+        let gr = modal.floor_row(c.right, c.right_dof);
+        let g = gl.iter().zip(&gr).map(|(a, b)| a - b).collect();
+        ContactGeom {
+            left: c.left,
+            right: c.right,
+            left_dof: c.left_dof,
+            right_dof: c.right_dof,
+            gap: c.gap,
+            restitution: c.restitution,
+            g,
+            m_left: modal.buildings[c.left].masses[c.left_dof],
+            m_right: modal.buildings[c.right].masses[c.right_dof],
+        }
+    }
+
+    #[inline]
+    pub fn dot(&self, q: &[f64]) -> f64 {
+        self.g.iter().zip(q).map(|(a, b)| a * b).sum()
+    }
+
+    /// δ = g·q − gap, m.
+    #[inline]
+    pub fn delta(&self, x: &[f64]) -> f64 {
+        self.dot(x) - self.gap
+    }
+}
+
+/// Delassus matrix of the contacts `set`.
+pub fn delassus(contacts: &[ContactGeom], set: &[usize]) -> Vec<Vec<f64>> {
+    set.iter()
+        .map(|&a| {
+            set.iter()
+                .map(|&b| contacts[a].dot(&contacts[b].g))
+                .collect()
+        })
+        .collect()
+}
+
+/// Solves the small dense system `a x = b` by Gaussian elimination with partial pivoting.
+pub fn solve_dense(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Option<Vec<f64>> {
+    let n = b.len();
+    for k in 0..n {
+        let p = (k..n).max_by(|&i, &j| a[i][k].abs().total_cmp(&a[j][k].abs()))?;
+        if a[p][k].abs() == 0.0 || !a[p][k].is_finite() {
+            return None;
+        }
+        a.swap(k, p);
+        b.swap(k, p);
+        for i in k + 1..n {
+            let f = a[i][k] / a[k][k];
+            for j in k..n {
+                a[i][j] -= f * a[k][j];
+            }
+            b[i] -= f * b[k];
+        }
+    }
+    let mut x = vec![0.0; n];
+    for k in (0..n).rev() {
+        let s: f64 = (k + 1..n).map(|j| a[k][j] * x[j]).sum();
+        x[k] = (b[k] - s) / a[k][k];
+    }
+    Some(x)
+}
+
+/// Non-negative impulses P on `set` with W P = target on the retained contacts (the
+/// others get P = 0): solve, drop the most negative, repeat. Returns (contact, P) pairs.
+pub fn lcp_impulses(contacts: &[ContactGeom], set: &[usize], target: &[f64]) -> Vec<(usize, f64)> {
+    let mut active: Vec<usize> = (0..set.len()).collect();
+    loop {
+        if active.is_empty() {
+            return vec![];
+        }
+        let ids: Vec<usize> = active.iter().map(|&k| set[k]).collect();
+        let w = delassus(contacts, &ids);
+        let rhs: Vec<f64> = active.iter().map(|&k| target[k]).collect();
+        let p = solve_dense(w, rhs).unwrap_or_else(|| vec![0.0; ids.len()]);
+        let (worst, pmin) =
+            p.iter().enumerate().fold(
+                (0, f64::INFINITY),
+                |m, (i, &x)| if x < m.1 { (i, x) } else { m },
+            );
+        if pmin >= 0.0 {
+            return ids.into_iter().zip(p).collect();
+        }
+        active.remove(worst);
+    }
+}
+
+/// Applies Δq̇ = −Σ g_c P_c.
+pub fn apply(contacts: &[ContactGeom], impulses: &[(usize, f64)], v: &mut [f64]) {
+    for &(c, p) in impulses {
+        for (vn, gn) in v.iter_mut().zip(&contacts[c].g) {
+            *vn -= gn * p;
+        }
+    }
+}
+
+/// The paper's impulse (eqs 23–24) for each contact of `set` from the pre-impact modal
+/// velocities `v`: applies Δq̇ = Φᵀ M Δẏ and returns the intended impulse m_k |Δẏ_k| per contact.
+pub fn apply_paper(
+    modal: &Modal,
+    contacts: &[ContactGeom],
+    set: &[usize],
+    v: &mut [f64],
+) -> Vec<(usize, f64)> {
+    let v_before = v.to_vec();
+    let mut out = Vec::new();
+    for &c in set {
+        let ct = &contacts[c];
+        let rl = modal.floor_row(ct.left, ct.left_dof);
+        let rr = modal.floor_row(ct.right, ct.right_dof);
+        // Floor velocities before (k = left floor, l = right floor).
+        let yk: f64 = rl.iter().zip(&v_before).map(|(a, b)| a * b).sum();
+        let yl: f64 = rr.iter().zip(&v_before).map(|(a, b)| a * b).sum();
+        let (mk, ml, e) = (ct.m_left, ct.m_right, ct.restitution);
+        // eq (23): ẏ_l⁺; eq (24) (l for the printed i): ẏ_k⁺.
+        let yl_after = (ml * yl + mk * yk - e * mk * (yl - yk)) / (ml + mk);
+        let yk_after = (mk * yk + ml * yl + e * ml * (yl - yk)) / (ml + mk);
+        let (dyk, dyl) = (yk_after - yk, yl_after - yl);
+        // Δq̇ = Φᵀ M Δẏ: only the contact floor is nonzero.
+        for n in 0..v.len() {
+            v[n] += rl[n] * mk * dyk + rr[n] * ml * dyl;
+        }
+        out.push((c, (mk * dyk).abs()));
+    }
+    out
+}

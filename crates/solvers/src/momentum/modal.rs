@@ -1,0 +1,353 @@
+//! Modal problem data and exact propagation between events (paper eqs 25–27).
+//!
+//! Every kept mode of every building is one entry of flat arrays (building 0's modes first),
+//! so the per-step loop runs over contiguous slices. Within a segment of length τ the modal
+//! load is linear, f(s) = f₀ + (f₁ − f₀) s/τ, and the exact solution is ([`Arc`])
+//!
+//! ```text
+//! q(s) = α + β s + e^{−ζωs} (A cos ω_d s + B sin ω_d s)
+//! β = (f₁ − f₀)/(τ ω²),  α = (f₀ − 2ζωβ)/ω²,  A = q₀ − α,  B = (q̇₀ − β + ζωA)/ω_d
+//! ```
+//!
+//! Full record (sub-)steps use precomputed Nigam–Jennings propagators
+//! ([`structure::ground::nigam_jennings::Propagator`]); partial segments (to or from an event)
+//! and event location use the closed form above.
+
+use std::ops::Range;
+
+use structure::ground::nigam_jennings::Propagator;
+use structure::{Building, ModelError};
+
+/// Kept modes of one building.
+#[derive(Debug, Clone)]
+pub struct BuildingModes {
+    /// Global indices of this building's modes.
+    pub range: Range<usize>,
+    /// Number of floors.
+    pub n_floors: usize,
+    /// Mode shapes, column-major: `phi[m * n_floors + i]` = φ_m[i] (m local mode index).
+    pub phi: Vec<f64>,
+    /// Floor masses, kg.
+    pub masses: Vec<f64>,
+    /// Modes available (= floors) and kept.
+    pub available: usize,
+}
+
+impl BuildingModes {
+    /// Floor displacements u = Φ q (or velocities from q̇) of this building into `out`.
+    #[inline]
+    pub fn to_floors(&self, q: &[f64], out: &mut [f64]) {
+        let nf = self.n_floors;
+        let out = &mut out[..nf];
+        out.fill(0.0);
+        for (m, &qm) in q[self.range.clone()].iter().enumerate() {
+            let col = &self.phi[m * nf..(m + 1) * nf];
+            for (o, p) in out.iter_mut().zip(col) {
+                *o += p * qm;
+            }
+        }
+    }
+}
+
+/// All kept modes of all buildings (the immutable modal problem).
+#[derive(Debug, Clone)]
+pub struct Modal {
+    /// ω_n, rad/s.
+    pub omega: Vec<f64>,
+    /// ζ_n.
+    pub zeta: Vec<f64>,
+    /// Participation factors Γ_n = φ_nᵀ M 1, kg^½: modal load −Γ_n a_g.
+    pub gamma: Vec<f64>,
+    pub buildings: Vec<BuildingModes>,
+}
+
+impl Modal {
+    /// Keeps `keep` modes per building (all if `None`; clamped to the floor count).
+    pub fn new(buildings: &[Building], keep: Option<usize>) -> Result<Modal, ModelError> {
+        let mut m = Modal {
+            omega: vec![],
+            zeta: vec![],
+            gamma: vec![],
+            buildings: vec![],
+        };
+        for b in buildings {
+            let all = b.modes()?;
+            let n = keep.unwrap_or(all.n_modes()).min(all.n_modes()).max(1);
+            let md = all.truncated(n);
+            let start = m.omega.len();
+            m.omega.extend_from_slice(&md.omega);
+            m.zeta.extend_from_slice(&md.zeta);
+            m.gamma.extend_from_slice(&md.participation);
+            let nf = b.n_floors();
+            let phi = (0..n)
+                .flat_map(|k| (0..nf).map(move |i| (k, i)))
+                .map(|(k, i)| md.phi[(i, k)])
+                .collect();
+            m.buildings.push(BuildingModes {
+                range: start..start + n,
+                n_floors: nf,
+                phi,
+                masses: b.masses.clone(),
+                available: all.n_modes(),
+            });
+        }
+        Ok(m)
+    }
+
+    /// Total number of kept modes.
+    pub fn len(&self) -> usize {
+        self.omega.len()
+    }
+
+    /// Whether no mode is kept.
+    pub fn is_empty(&self) -> bool {
+        self.omega.is_empty()
+    }
+
+    /// φ_n[dof] of building `b`, as a dense vector over all modes (zero elsewhere).
+    pub fn floor_row(&self, b: usize, dof: usize) -> Vec<f64> {
+        let bm = &self.buildings[b];
+        let mut row = vec![0.0; self.len()];
+        for (m, n) in bm.range.clone().enumerate() {
+            row[n] = bm.phi[m * bm.n_floors + dof];
+        }
+        row
+    }
+
+    /// Projection q = Φᵀ M u of floor values `u` of building `b` into `q`.
+    pub fn project(&self, b: usize, u: &[f64], q: &mut [f64]) {
+        let bm = &self.buildings[b];
+        for (m, n) in bm.range.clone().enumerate() {
+            q[n] = (0..bm.n_floors)
+                .map(|i| bm.phi[m * bm.n_floors + i] * bm.masses[i] * u[i])
+                .sum();
+        }
+    }
+
+    /// Modal energy Σ ½(q̇² + ω² q²), J (kinetic + strain energy of the kept modes).
+    pub fn energy(&self, x: &[f64], v: &[f64]) -> f64 {
+        let mut e = 0.0;
+        for n in 0..self.len() {
+            e += 0.5 * (v[n] * v[n] + self.omega[n] * self.omega[n] * x[n] * x[n]);
+        }
+        e
+    }
+
+    /// Modal accelerations q̈ = f − 2ζωq̇ − ω²q.
+    pub fn accel(&self, n: usize, x: f64, v: f64, f: f64) -> f64 {
+        let w = self.omega[n];
+        f - 2.0 * self.zeta[n] * w * v - w * w * x
+    }
+}
+
+/// Precomputed coefficients of one step of length `h` for every mode (structure of arrays).
+#[derive(Debug, Clone)]
+pub struct StepCoeffs {
+    pub h: f64,
+    pub a00: Vec<f64>,
+    pub a01: Vec<f64>,
+    pub a10: Vec<f64>,
+    pub a11: Vec<f64>,
+    pub b00: Vec<f64>,
+    pub b01: Vec<f64>,
+    pub b10: Vec<f64>,
+    pub b11: Vec<f64>,
+    /// 2ζω.
+    pub two_zw: Vec<f64>,
+    /// 1/ω².
+    pub inv_w2: Vec<f64>,
+    /// Damping work 2ζω ∫₀ʰ q̇² ds as a quadratic form in z = (q₀, q̇₀, f₀, f₁): the 10 upper
+    /// coefficients (off-diagonal ones doubled), order 00 01 02 03 11 12 13 22 23 33.
+    pub dq: [Vec<f64>; 10],
+}
+
+impl StepCoeffs {
+    pub fn new(modal: &Modal, h: f64) -> StepCoeffs {
+        let nm = modal.len();
+        let mut c = StepCoeffs {
+            h,
+            a00: vec![0.0; nm],
+            a01: vec![0.0; nm],
+            a10: vec![0.0; nm],
+            a11: vec![0.0; nm],
+            b00: vec![0.0; nm],
+            b01: vec![0.0; nm],
+            b10: vec![0.0; nm],
+            b11: vec![0.0; nm],
+            two_zw: vec![0.0; nm],
+            inv_w2: vec![0.0; nm],
+            dq: Default::default(),
+        };
+        for q in c.dq.iter_mut() {
+            *q = vec![0.0; nm];
+        }
+        for n in 0..nm {
+            let (w, z) = (modal.omega[n], modal.zeta[n]);
+            let p = Propagator::new(w, z, h);
+            c.a00[n] = p.a[0][0];
+            c.a01[n] = p.a[0][1];
+            c.a10[n] = p.a[1][0];
+            c.a11[n] = p.a[1][1];
+            c.b00[n] = p.b[0][0];
+            c.b01[n] = p.b[0][1];
+            c.b10[n] = p.b[1][0];
+            c.b11[n] = p.b[1][1];
+            c.two_zw[n] = 2.0 * z * w;
+            c.inv_w2[n] = 1.0 / (w * w);
+            // Polarisation of the exact quadratic form I(z) = ∫ q̇² ds.
+            let unit = |i: usize| {
+                let mut e = [0.0; 4];
+                e[i] = 1.0;
+                e
+            };
+            let i_of = |e: [f64; 4]| Arc::new(w, z, e[0], e[1], e[2], e[3], h).damping_integral(h);
+            let diag: Vec<f64> = (0..4).map(|i| i_of(unit(i))).collect();
+            let mut k = 0;
+            for i in 0..4 {
+                for j in i..4 {
+                    let g = if i == j {
+                        diag[i]
+                    } else {
+                        let mut e = unit(i);
+                        e[j] = 1.0;
+                        i_of(e) - diag[i] - diag[j] // = 2 G_ij
+                    };
+                    c.dq[k][n] = 2.0 * z * w * g;
+                    k += 1;
+                }
+            }
+        }
+        c
+    }
+}
+
+/// The exact free-plus-linear-load solution of one mode over one segment (see module docs).
+#[derive(Debug, Clone, Copy)]
+pub struct Arc {
+    pub alpha: f64,
+    pub beta: f64,
+    pub a: f64,
+    pub b: f64,
+    /// ζω.
+    pub c: f64,
+    /// ω_d.
+    pub d: f64,
+    pub omega: f64,
+    pub f0: f64,
+    /// Load slope (f₁ − f₀)/τ.
+    pub g: f64,
+    pub x0: f64,
+    pub v0: f64,
+}
+
+impl Arc {
+    /// Mode (ω, ζ) from (x₀, v₀) under the load f₀ → f₁ over τ > 0.
+    #[inline]
+    pub fn new(omega: f64, zeta: f64, x0: f64, v0: f64, f0: f64, f1: f64, tau: f64) -> Arc {
+        let w2 = omega * omega;
+        let g = (f1 - f0) / tau;
+        let beta = g / w2;
+        let c = zeta * omega;
+        let alpha = (f0 - 2.0 * c * beta) / w2;
+        let d = omega * (1.0 - zeta * zeta).sqrt();
+        let a = x0 - alpha;
+        let b = (v0 - beta + c * a) / d;
+        Arc {
+            alpha,
+            beta,
+            a,
+            b,
+            c,
+            d,
+            omega,
+            f0,
+            g,
+            x0,
+            v0,
+        }
+    }
+
+    /// (q(s), q̇(s)).
+    #[inline]
+    pub fn xv(&self, s: f64) -> (f64, f64) {
+        let e = (-self.c * s).exp();
+        let (sn, cs) = (self.d * s).sin_cos();
+        let h = self.a * cs + self.b * sn;
+        let hd =
+            (self.b * self.d - self.c * self.a) * cs - (self.a * self.d + self.c * self.b) * sn;
+        (self.alpha + self.beta * s + e * h, self.beta + e * hd)
+    }
+
+    /// Load at s.
+    #[inline]
+    pub fn load(&self, s: f64) -> f64 {
+        self.f0 + self.g * s
+    }
+
+    /// |homogeneous amplitude| √(A² + B²)·(1 + ζω/ω_d) bound used with |q⁽ᵏ⁾_h| ≤ ω^k·amp.
+    pub fn amplitude(&self) -> f64 {
+        // |Re(Z e^{λs})| with Z = A − iB: modulus √(A²+B²); derivatives multiply by |λ| = ω.
+        (self.a * self.a + self.b * self.b).sqrt()
+    }
+
+    /// ∫₀ˢ q̇² dσ in closed form.
+    pub fn damping_integral(&self, s: f64) -> f64 {
+        let (c, d) = (self.c, self.d);
+        let cc = self.b * d - c * self.a;
+        let dd = -(self.a * d + c * self.b);
+        // ∫ e^{ps} cos qs, ∫ e^{ps} sin qs over [0, s]
+        let ecs = |p: f64, q: f64| -> (f64, f64) {
+            let e = (p * s).exp();
+            let (sn, cs) = (q * s).sin_cos();
+            let den = p * p + q * q;
+            (
+                (e * (p * cs + q * sn) - p) / den,
+                (e * (p * sn - q * cs) + q) / den,
+            )
+        };
+        let x = |p: f64| if p == 0.0 { s } else { (p * s).exp_m1() / p };
+        let (e1c, e1s) = ecs(-c, d);
+        let (e2c, e2s) = ecs(-2.0 * c, 2.0 * d);
+        let j1 = cc * e1c + dd * e1s;
+        let j2 = 0.5 * (cc * cc + dd * dd) * x(-2.0 * c)
+            + 0.5 * (cc * cc - dd * dd) * e2c
+            + cc * dd * e2s;
+        self.beta * self.beta * s + 2.0 * self.beta * j1 + j2
+    }
+
+    /// Work of the load ∫₀ˢ f q̇ dσ given the end state (x1, v1) = (q(s), q̇(s)), exact.
+    #[inline]
+    pub fn load_work(&self, s: f64, x1: f64, v1: f64) -> f64 {
+        load_work(
+            self.omega,
+            2.0 * self.c,
+            self.f0,
+            self.load(s),
+            s,
+            self.x0,
+            self.v0,
+            x1,
+            v1,
+        )
+    }
+}
+
+/// ∫₀ᵗ f q̇ ds for a linear load f₀ → f₁ over τ, from the end states of the exact solution:
+/// f₀Δq + (f₁ − f₀)(q₁ − ∫q/τ), with ∫q = (½(f₀+f₁)τ − Δq̇ − 2ζωΔq)/ω² from the equation of
+/// motion.
+#[inline]
+#[allow(clippy::too_many_arguments)]
+pub fn load_work(
+    omega: f64,
+    two_zw: f64,
+    f0: f64,
+    f1: f64,
+    tau: f64,
+    x0: f64,
+    v0: f64,
+    x1: f64,
+    v1: f64,
+) -> f64 {
+    let ix = (0.5 * (f0 + f1) * tau - (v1 - v0) - two_zw * (x1 - x0)) / (omega * omega);
+    f0 * (x1 - x0) + (f1 - f0) * (x1 - ix / tau)
+}

@@ -1,0 +1,888 @@
+//! Problem (immutable), state (mutable) and the stepper that advances one segment.
+
+use std::collections::VecDeque;
+
+use structure::scene::{ImpulseVariant, Limits};
+use structure::{MomentumOptions, Scene};
+
+use super::energy::EnergyAccount;
+use super::events::Locator;
+use super::impulse::{self, ContactGeom};
+use super::modal::{Arc, Modal, StepCoeffs};
+use super::persistent;
+use crate::response::ResponseTracker;
+use crate::{BuildingResponse, History, Impact, PersistentContact, SolverError, Stats};
+use structure::ground::nigam_jennings::Propagator;
+
+/// Simultaneity window for closures, s.
+pub const SIMULTANEOUS: f64 = 1e-12;
+/// Sliding window of the impact-rate guard, s.
+pub const STORM_WINDOW: f64 = 0.05;
+
+/// Everything that does not change during a run.
+#[derive(Debug, Clone)]
+pub struct Problem {
+    pub modal: Modal,
+    pub contacts: Vec<ContactGeom>,
+    pub options: MomentumOptions,
+    pub limits: Limits,
+    pub duration: f64,
+    /// Record step, s (without a record: T_min/8).
+    pub record_dt: f64,
+    /// Event-check windows per step (T_min < 8·h ⇒ ⌈8 h/T_min⌉, else 1): δ and δ̇ are
+    /// checked at these interior points so that each window holds at most one extremum.
+    pub sub: usize,
+    /// Base step h = record_dt, s (propagation, energy, response sampling).
+    pub h: f64,
+    /// Propagators from a step start to its interior check points k·h/sub, k = 1 … sub−1
+    /// (per point, per mode: a00 a01 b00 b01 a10 a11 b10 b11).
+    pub checks: Vec<Vec<[f64; 8]>>,
+    /// Number of base steps covering the duration (the last may be partial).
+    pub n_steps: usize,
+    /// Ground acceleration at the start and end of each base step, m/s² (zero past the record).
+    pub ag_start: Vec<f64>,
+    pub ag_end: Vec<f64>,
+    /// Propagators and energy forms for a full base step.
+    pub full: StepCoeffs,
+}
+
+impl Problem {
+    pub fn new(scene: &Scene) -> Result<Problem, SolverError> {
+        let modal = Modal::new(&scene.buildings, scene.momentum.modes)?;
+        let contacts = scene
+            .contacts
+            .iter()
+            .map(|c| ContactGeom::new(&modal, c))
+            .collect();
+        let w_max = modal.omega.iter().cloned().fold(0.0, f64::max);
+        let t_min = 2.0 * std::f64::consts::PI / w_max;
+        let record_dt = scene.ground.as_ref().map_or(t_min / 8.0, |g| g.dt);
+        let sub = if t_min < 8.0 * record_dt {
+            (8.0 * record_dt / t_min).ceil() as usize
+        } else {
+            1
+        };
+        let h = record_dt;
+        let checks = (1..sub)
+            .map(|k| {
+                let s = h * k as f64 / sub as f64;
+                (0..modal.len())
+                    .map(|n| {
+                        let pr = Propagator::new(modal.omega[n], modal.zeta[n], s);
+                        [
+                            pr.a[0][0], pr.a[0][1], pr.b[0][0], pr.b[0][1], pr.a[1][0], pr.a[1][1],
+                            pr.b[1][0], pr.b[1][1],
+                        ]
+                    })
+                    .collect()
+            })
+            .collect();
+        let n_steps = ((scene.duration / h) - 1e-9).ceil().max(1.0) as usize;
+        let mut ag_start = vec![0.0; n_steps];
+        let mut ag_end = vec![0.0; n_steps];
+        if let Some(g) = &scene.ground {
+            for j in 0..n_steps.min(g.npts().saturating_sub(1)) {
+                ag_start[j] = g.accel[j];
+                ag_end[j] = g.accel[j + 1];
+            }
+        }
+        let full = StepCoeffs::new(&modal, h);
+        Ok(Problem {
+            modal,
+            contacts,
+            options: scene.momentum.clone(),
+            limits: scene.limits.clone(),
+            duration: scene.duration,
+            record_dt,
+            sub,
+            h,
+            checks,
+            n_steps,
+            ag_start,
+            ag_end,
+            full,
+        })
+    }
+
+    /// Ground acceleration at time t inside base step j, m/s².
+    #[inline]
+    pub fn ground(&self, j: usize, t: f64) -> f64 {
+        let j = j.min(self.n_steps - 1);
+        let r = ((t - j as f64 * self.h) / self.h).clamp(0.0, 1.0);
+        self.ag_start[j] + r * (self.ag_end[j] - self.ag_start[j])
+    }
+
+    /// Start time of base step j.
+    #[inline]
+    pub fn grid(&self, j: usize) -> f64 {
+        (j as f64 * self.h).min(self.duration)
+    }
+}
+
+/// The mutable state: time, modal coordinates, contacts held together.
+#[derive(Debug, Clone)]
+pub struct State {
+    pub t: f64,
+    /// Base step containing t (t ∈ [grid(j), grid(j+1))).
+    pub j: usize,
+    /// Whether t is exactly grid(j).
+    pub on_grid: bool,
+    /// Modal displacements q and velocities q̇ (all buildings, flat).
+    pub x: Vec<f64>,
+    pub v: Vec<f64>,
+    /// Contacts in a persistent-contact phase, with the phase start, s.
+    pub persistent: Vec<(usize, f64)>,
+}
+
+/// What one call of [`Stepper::advance`] did.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Step {
+    /// Reached the end of the segment (a record sub-step point or the analysis end).
+    Reached,
+    /// These contacts close at `time` (state is at `time`, before the impulse).
+    ContactClosed { contacts: Vec<usize>, time: f64 },
+    /// A persistent contact was released at `time` (force would turn tensile).
+    Released { contact: usize, time: f64 },
+    /// The analysis end is reached.
+    Finished,
+}
+
+/// Per-impact diagnostics not in the JSON output (used by tests).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ImpactDiagnostics {
+    pub time: f64,
+    pub contacts: Vec<usize>,
+    /// Σ Γ_n q̇_n over all buildings before and after (physical momentum with all modes), N·s.
+    pub momentum_before: f64,
+    pub momentum_after: f64,
+    pub kinetic_before: f64,
+    pub kinetic_after: f64,
+    /// A consistent correction followed the paper impulse (floors still approaching).
+    pub corrected: bool,
+    /// The event started a persistent-contact phase.
+    pub captured: bool,
+}
+
+/// Extra results of a run (tests).
+#[derive(Debug, Clone, Default)]
+pub struct Diagnostics {
+    pub impacts: Vec<ImpactDiagnostics>,
+    pub corrections: u64,
+    pub sub_steps: usize,
+    pub base_step: f64,
+    pub final_x: Vec<f64>,
+    pub final_v: Vec<f64>,
+}
+
+/// Advances the state one segment at a time; owns the accumulated results.
+pub struct Stepper<'a> {
+    pub p: &'a Problem,
+    pub s: State,
+    pub energy: EnergyAccount,
+    pub tracker: ResponseTracker,
+    pub history: Option<&'a mut History>,
+    pub impacts: Vec<Impact>,
+    pub phases: Vec<PersistentContact>,
+    pub stats: Stats,
+    pub diag: Diagnostics,
+    recent: VecDeque<(f64, usize)>,
+    last_impacts: Vec<VecDeque<f64>>,
+    xn: Vec<f64>,
+    vn: Vec<f64>,
+    disp_max: Vec<Vec<f64>>,
+    /// Per-mode energy sums of the fast path (input, damping), J; folded in by `finish`.
+    win_acc: Vec<f64>,
+    dmp_acc: Vec<f64>,
+    shear_max: Vec<Vec<f64>>,
+    stiffness: Vec<Vec<f64>>,
+    u: Vec<Vec<f64>>,
+    arcs: Vec<Arc>,
+}
+
+impl<'a> Stepper<'a> {
+    pub fn new(
+        p: &'a Problem,
+        scene: &Scene,
+        history: Option<&'a mut History>,
+    ) -> Result<Self, SolverError> {
+        let nm = p.modal.len();
+        let mut x = vec![0.0; nm];
+        let mut v = vec![0.0; nm];
+        for (b, bd) in scene.buildings.iter().enumerate() {
+            p.modal.project(b, &bd.initial_displacement, &mut x);
+            p.modal.project(b, &bd.initial_velocity, &mut v);
+        }
+        let mut st = Stepper {
+            p,
+            s: State {
+                t: 0.0,
+                j: 0,
+                on_grid: true,
+                x,
+                v,
+                persistent: vec![],
+            },
+            energy: EnergyAccount::default(),
+            tracker: ResponseTracker::new(scene),
+            history,
+            impacts: vec![],
+            phases: vec![],
+            stats: Stats {
+                min_step: f64::INFINITY,
+                ..Stats::default()
+            },
+            diag: Diagnostics {
+                sub_steps: p.sub,
+                base_step: p.h,
+                ..Diagnostics::default()
+            },
+            recent: VecDeque::new(),
+            last_impacts: vec![VecDeque::new(); p.contacts.len()],
+            xn: vec![0.0; nm],
+            vn: vec![0.0; nm],
+            win_acc: vec![0.0; nm],
+            dmp_acc: vec![0.0; nm],
+            disp_max: scene
+                .buildings
+                .iter()
+                .map(|b| vec![0.0; b.n_floors()])
+                .collect(),
+            shear_max: scene
+                .buildings
+                .iter()
+                .map(|b| vec![0.0; b.n_floors()])
+                .collect(),
+            stiffness: scene
+                .buildings
+                .iter()
+                .map(|b| b.story_stiffness.clone())
+                .collect(),
+            u: p.modal
+                .buildings
+                .iter()
+                .map(|b| vec![0.0; b.n_floors])
+                .collect(),
+            arcs: Vec::with_capacity(nm),
+        };
+        st.energy.initial = p.modal.energy(&st.s.x, &st.s.v);
+        for (c, ct) in p.contacts.iter().enumerate() {
+            let d = ct.delta(&st.s.x);
+            if d > 1e-9 * ct.gap.max(1e-3) {
+                return Err(SolverError::Stalled {
+                    time: 0.0,
+                    reason: format!("contact {c} starts penetrated by {d:.3e} m (initial displacements exceed the gap)"),
+                });
+            }
+        }
+        st.observe();
+        Ok(st)
+    }
+
+    /// Floor displacements of every building at the current instant: peaks (branch-free,
+    /// vectorisable) and, when a history is requested, the shared [`ResponseTracker`].
+    fn observe(&mut self) {
+        let x = &self.s.x;
+        for (b, bm) in self.p.modal.buildings.iter().enumerate() {
+            let u = &mut self.u[b];
+            bm.to_floors(x, u);
+            let (dm, sm, k) = (
+                &mut self.disp_max[b],
+                &mut self.shear_max[b],
+                &self.stiffness[b],
+            );
+            let nf = u.len();
+            let (dm, sm, k, u) = (&mut dm[..nf], &mut sm[..nf], &k[..nf], &u[..nf]);
+            for i in 0..nf {
+                let d = u[i].abs();
+                dm[i] = if d > dm[i] { d } else { dm[i] };
+            }
+            let v0 = (k[0] * u[0]).abs();
+            sm[0] = if v0 > sm[0] { v0 } else { sm[0] };
+            for i in 1..nf {
+                let vs = (k[i] * (u[i] - u[i - 1])).abs();
+                sm[i] = if vs > sm[i] { vs } else { sm[i] };
+            }
+            if self.history.is_some() {
+                self.tracker.observe(b, u);
+            }
+        }
+        if self.history.is_some() {
+            self.tracker.sample(self.s.t, self.history.as_deref_mut());
+        }
+    }
+
+    /// Peak story shears and floor displacements per building.
+    pub fn peaks(&self, scene: &Scene) -> Vec<BuildingResponse> {
+        scene
+            .buildings
+            .iter()
+            .enumerate()
+            .map(|(b, bd)| BuildingResponse {
+                name: bd.name.clone(),
+                story_shear_max: self.shear_max[b].clone(),
+                floor_displacement_max: self.disp_max[b].clone(),
+            })
+            .collect()
+    }
+
+    fn count_step(&mut self, tau: f64) -> Result<(), SolverError> {
+        self.stats.steps += 1;
+        if tau > 0.0 {
+            self.stats.min_step = self.stats.min_step.min(tau);
+            self.stats.max_step = self.stats.max_step.max(tau);
+        }
+        if self.stats.steps > self.p.limits.max_steps {
+            return Err(SolverError::StepBudget {
+                time: self.s.t,
+                steps: self.stats.steps,
+                limit: self.p.limits.max_steps,
+            });
+        }
+        // Checked every 64 segments (and at the end): a non-finite mode stays non-finite.
+        if self.stats.steps % 64 == 0 && !self.state_is_finite() {
+            return Err(SolverError::NonFinite {
+                time: self.s.t,
+                context: "modal state after a propagation segment".into(),
+            });
+        }
+        Ok(())
+    }
+
+    fn state_is_finite(&self) -> bool {
+        self.s.x.iter().chain(&self.s.v).all(|z| z.is_finite())
+    }
+
+    /// Physical momentum Σ Γ_n q̇_n (all buildings), N·s.
+    pub fn momentum(&self) -> f64 {
+        self.p
+            .modal
+            .gamma
+            .iter()
+            .zip(&self.s.v)
+            .map(|(g, v)| g * v)
+            .sum()
+    }
+
+    fn kinetic(&self) -> f64 {
+        0.5 * self.s.v.iter().map(|v| v * v).sum::<f64>()
+    }
+
+    /// Advances one segment.
+    pub fn advance(&mut self) -> Result<Step, SolverError> {
+        let p = self.p;
+        let end_tol = 1e-12 * p.h;
+        if self.s.t >= p.duration - end_tol {
+            return Ok(Step::Finished);
+        }
+        let j = self.s.j;
+        let t_end = if j + 1 >= p.n_steps {
+            p.duration
+        } else {
+            p.grid(j + 1)
+        };
+        let tau = t_end - self.s.t;
+        if tau <= end_tol.max(1e-15 * self.s.t) {
+            // Degenerate sliver: jump to the grid point (state unchanged).
+            self.finish_grid(j, t_end);
+            return Ok(Step::Reached);
+        }
+        if !self.s.persistent.is_empty() {
+            return self.persistent_segment(tau, t_end);
+        }
+        if self.s.on_grid && (tau - p.h).abs() <= 1e-9 * p.h {
+            if let Some(step) = self.fast_step(j, t_end)? {
+                return Ok(step);
+            }
+        }
+        self.segment(tau, t_end, None)
+    }
+
+    fn finish_grid(&mut self, j: usize, t_end: f64) {
+        self.s.t = t_end;
+        self.s.j = (j + 1).min(self.p.n_steps);
+        self.s.on_grid = true;
+    }
+
+    /// A full base step with precomputed propagators; `None` if an event may occur (the
+    /// caller then takes the closed-form path from the unchanged state).
+    fn fast_step(&mut self, j: usize, t_end: f64) -> Result<Option<Step>, SolverError> {
+        let p = self.p;
+        let (a0, a1) = (p.ag_start[j], p.ag_end[j]);
+        let h = p.full.h;
+        {
+            // Structure of arrays, all sliced to `nm` so that the loop has no bounds checks
+            // and no cross-mode dependency (per-mode energy accumulators): it vectorises.
+            let c = &p.full;
+            let nm = self.s.x.len();
+            let (x, v) = (&self.s.x[..nm], &self.s.v[..nm]);
+            let (xn, vn) = (&mut self.xn[..nm], &mut self.vn[..nm]);
+            let (win, dmp) = (&mut self.win_acc[..nm], &mut self.dmp_acc[..nm]);
+            let (a00, a01, a10, a11) = (&c.a00[..nm], &c.a01[..nm], &c.a10[..nm], &c.a11[..nm]);
+            let (b00, b01, b10, b11) = (&c.b00[..nm], &c.b01[..nm], &c.b10[..nm], &c.b11[..nm]);
+            let (tzw, iw2, gam) = (&c.two_zw[..nm], &c.inv_w2[..nm], &p.modal.gamma[..nm]);
+            let q = &c.dq;
+            let (q0, q1, q2, q3, q4) = (
+                &q[0][..nm],
+                &q[1][..nm],
+                &q[2][..nm],
+                &q[3][..nm],
+                &q[4][..nm],
+            );
+            let (q5, q6, q7, q8, q9) = (
+                &q[5][..nm],
+                &q[6][..nm],
+                &q[7][..nm],
+                &q[8][..nm],
+                &q[9][..nm],
+            );
+            let inv_h = 1.0 / h;
+            for n in 0..nm {
+                let f0 = -gam[n] * a0;
+                let f1 = -gam[n] * a1;
+                let (x0, v0) = (x[n], v[n]);
+                let x1 = a00[n] * x0 + a01[n] * v0 + b00[n] * f0 + b01[n] * f1;
+                let v1 = a10[n] * x0 + a11[n] * v0 + b10[n] * f0 + b11[n] * f1;
+                let ix = (0.5 * (f0 + f1) * h - (v1 - v0) - tzw[n] * (x1 - x0)) * iw2[n];
+                win[n] += f0 * (x1 - x0) + (f1 - f0) * (x1 - ix * inv_h);
+                dmp[n] += x0 * (q0[n] * x0 + q1[n] * v0 + q2[n] * f0 + q3[n] * f1)
+                    + v0 * (q4[n] * v0 + q5[n] * f0 + q6[n] * f1)
+                    + f0 * (q7[n] * f0 + q8[n] * f1)
+                    + q9[n] * f1 * f1;
+                xn[n] = x1;
+                vn[n] = v1;
+            }
+        }
+        let sub = p.sub;
+        let mut arcs_built = false;
+        for ct in &p.contacts {
+            // δ, δ̇ at the window ends 0, h/sub, …, h.
+            let mut prev = (ct.delta(&self.s.x), ct.dot(&self.s.v));
+            if prev.0 >= 0.0 {
+                return Ok(None);
+            }
+            for w in 1..=sub {
+                let cur = if w == sub {
+                    (ct.delta(&self.xn), ct.dot(&self.vn))
+                } else {
+                    let r = w as f64 / sub as f64;
+                    let (mut d, mut dd) = (-ct.gap, 0.0);
+                    for ((k, g), ((&x0, &v0), &gam)) in p.checks[w - 1]
+                        .iter()
+                        .zip(&ct.g)
+                        .zip(self.s.x.iter().zip(&self.s.v).zip(&p.modal.gamma))
+                    {
+                        if *g != 0.0 {
+                            let (f0, f1) = (-gam * a0, -gam * (a0 + r * (a1 - a0)));
+                            d += g * (k[0] * x0 + k[1] * v0 + k[2] * f0 + k[3] * f1);
+                            dd += g * (k[4] * x0 + k[5] * v0 + k[6] * f0 + k[7] * f1);
+                        }
+                    }
+                    (d, dd)
+                };
+                if cur.0 >= 0.0 {
+                    return Ok(None);
+                }
+                if prev.1 > 0.0 && cur.1 < 0.0 {
+                    if !arcs_built {
+                        self.build_arcs(a0, a1, h, None);
+                        arcs_built = true;
+                    }
+                    let loc = Locator {
+                        contact: ct,
+                        arcs: &self.arcs,
+                        modal: &p.modal,
+                        lo: h * (w - 1) as f64 / sub as f64,
+                        hi: h * w as f64 / sub as f64,
+                        tol: 0.0,
+                        iterations: 0,
+                    };
+                    if !loc.surely_open(prev.0, prev.1, cur.0, cur.1) {
+                        return Ok(None);
+                    }
+                }
+                prev = cur;
+            }
+        }
+        std::mem::swap(&mut self.s.x, &mut self.xn);
+        std::mem::swap(&mut self.s.v, &mut self.vn);
+        self.finish_grid(j, t_end);
+        self.count_step(h)?;
+        self.observe();
+        Ok(Some(Step::Reached))
+    }
+
+    /// Arcs of every mode from the current state, ground a0 → a1 over tau, plus the
+    /// constant contact loads `fc`.
+    fn build_arcs(&mut self, a0: f64, a1: f64, tau: f64, fc: Option<&[f64]>) {
+        let m = &self.p.modal;
+        self.arcs.clear();
+        for n in 0..m.len() {
+            let extra = fc.map_or(0.0, |f| f[n]);
+            let (f0, f1) = (-m.gamma[n] * a0 + extra, -m.gamma[n] * a1 + extra);
+            self.arcs.push(Arc::new(
+                m.omega[n],
+                m.zeta[n],
+                self.s.x[n],
+                self.s.v[n],
+                f0,
+                f1,
+                tau,
+            ));
+        }
+    }
+
+    /// General segment of length tau on the closed form, with event location.
+    fn segment(&mut self, tau: f64, t_end: f64, fc: Option<&[f64]>) -> Result<Step, SolverError> {
+        let p = self.p;
+        let j = self.s.j;
+        let (a0, a1) = (p.ground(j, self.s.t), p.ground(j, t_end));
+        self.build_arcs(a0, a1, tau, fc);
+        for n in 0..self.arcs.len() {
+            let (x1, v1) = self.arcs[n].xv(tau);
+            self.xn[n] = x1;
+            self.vn[n] = v1;
+        }
+        let tol = 2.0 * f64::EPSILON * (self.s.t + tau) + 1e-300;
+        let mut first: Option<f64> = None;
+        let mut found: Vec<(usize, f64)> = vec![];
+        for (ci, ct) in p.contacts.iter().enumerate() {
+            if self.s.persistent.iter().any(|&(c, _)| c == ci) {
+                continue;
+            }
+            // Windows of at most h/sub: at most one extremum of δ each.
+            let m = ((tau / (p.h / p.sub as f64)) - 1e-9).ceil().max(1.0) as usize;
+            let at = |s: f64, arcs: &[Arc]| {
+                let (mut d, mut dd) = (-ct.gap, 0.0);
+                for (g, a) in ct.g.iter().zip(arcs) {
+                    if *g != 0.0 {
+                        let (x, v) = a.xv(s);
+                        d += g * x;
+                        dd += g * v;
+                    }
+                }
+                (d, dd)
+            };
+            let mut prev = (ct.delta(&self.s.x), ct.dot(&self.s.v));
+            let mut r = None;
+            for w in 1..=m {
+                let (lo, hi) = (
+                    tau * (w - 1) as f64 / m as f64,
+                    if w == m {
+                        tau
+                    } else {
+                        tau * w as f64 / m as f64
+                    },
+                );
+                let cur = if w == m {
+                    (ct.delta(&self.xn), ct.dot(&self.vn))
+                } else {
+                    at(hi, &self.arcs)
+                };
+                let mut loc = Locator {
+                    contact: ct,
+                    arcs: &self.arcs,
+                    modal: &p.modal,
+                    lo,
+                    hi,
+                    tol,
+                    iterations: 0,
+                };
+                r = loc.locate(prev.0, prev.1, cur.0, cur.1);
+                self.stats.root_iterations += loc.iterations;
+                if r.is_some() {
+                    break;
+                }
+                prev = cur;
+            }
+            if let Some(s) = r {
+                found.push((ci, s));
+                first = Some(first.map_or(s, |f: f64| f.min(s)));
+            }
+        }
+        let (s_end, step) = match first {
+            None => (tau, Step::Reached),
+            Some(s) => {
+                let contacts: Vec<usize> = found
+                    .iter()
+                    .filter(|(_, sc)| *sc <= s + SIMULTANEOUS)
+                    .map(|(c, _)| *c)
+                    .collect();
+                (
+                    s,
+                    Step::ContactClosed {
+                        contacts,
+                        time: self.s.t + s,
+                    },
+                )
+            }
+        };
+        // Commit [0, s_end] with its energy.
+        let m = &p.modal;
+        for n in 0..self.arcs.len() {
+            let a = self.arcs[n];
+            let (x1, v1) = if s_end == tau {
+                (self.xn[n], self.vn[n])
+            } else {
+                a.xv(s_end)
+            };
+            if s_end > 0.0 {
+                let w = a.load_work(s_end, x1, v1);
+                let extra = fc.map_or(0.0, |f| f[n]);
+                let wc = extra * (x1 - a.x0);
+                self.energy.input += w - wc;
+                self.energy.contact -= wc;
+                self.energy.damping += 2.0 * m.zeta[n] * m.omega[n] * a.damping_integral(s_end);
+            }
+            self.s.x[n] = x1;
+            self.s.v[n] = v1;
+        }
+        if s_end == tau {
+            self.finish_grid(j, t_end);
+        } else {
+            self.s.t += s_end;
+            self.s.on_grid = false;
+        }
+        self.count_step(s_end)?;
+        self.observe();
+        Ok(step)
+    }
+
+    fn persistent_segment(&mut self, tau: f64, t_end: f64) -> Result<Step, SolverError> {
+        let p = self.p;
+        let j = self.s.j;
+        let (a0, a1) = (p.ground(j, self.s.t), p.ground(j, t_end));
+        self.build_arcs(a0, a1, tau, None);
+        let set: Vec<usize> = self.s.persistent.iter().map(|&(c, _)| c).collect();
+        let free_end: Vec<f64> = self.arcs.iter().map(|a| a.xv(tau).0).collect();
+        let dfree: Vec<f64> = set
+            .iter()
+            .map(|&c| p.contacts[c].delta(&free_end))
+            .collect();
+        let lam = persistent::contact_forces(&p.modal, &p.contacts, &set, tau, &dfree);
+        let (worst, lmin) =
+            lam.iter().enumerate().fold(
+                (0, f64::INFINITY),
+                |m, (i, &l)| if l < m.1 { (i, l) } else { m },
+            );
+        if lmin < 0.0 || !lmin.is_finite() {
+            let (c, start) = self.s.persistent.remove(worst);
+            if self.s.t > start {
+                self.phases.push(PersistentContact {
+                    contact: c,
+                    start,
+                    end: self.s.t,
+                    released_by: "tension".into(),
+                });
+            }
+            self.stats.events += 1;
+            return Ok(Step::Released {
+                contact: c,
+                time: self.s.t,
+            });
+        }
+        let mut fc = vec![0.0; p.modal.len()];
+        for (k, &c) in set.iter().enumerate() {
+            for (f, g) in fc.iter_mut().zip(&p.contacts[c].g) {
+                *f -= g * lam[k];
+            }
+        }
+        self.segment(tau, t_end, Some(&fc))
+    }
+
+    /// Applies the impulses of the contacts closing now (see [`super::impulse`]).
+    pub fn impact(&mut self, contacts: &[usize]) -> Result<(), SolverError> {
+        let p = self.p;
+        let t = self.s.t;
+        self.stats.events += 1;
+        // Impact-rate guard.
+        for &c in contacts {
+            self.recent.push_back((t, c));
+        }
+        while let Some(&(t0, _)) = self.recent.front() {
+            if t - t0 > STORM_WINDOW {
+                self.recent.pop_front();
+            } else {
+                break;
+            }
+        }
+        let limit = p.limits.max_impact_rate;
+        if self.recent.len() as f64 > (limit * STORM_WINDOW).ceil().max(2.0) {
+            let c = contacts[0];
+            return Err(SolverError::EventStorm {
+                time: t,
+                impacts: self.recent.len(),
+                window: STORM_WINDOW,
+                limit,
+                context: format!(
+                    "contact {c} (c_r = {}); {} with persistent_contact = {}",
+                    p.contacts[c].restitution,
+                    "impacts accumulate (chattering)",
+                    p.options.persistent_contact
+                ),
+            });
+        }
+        let v_before: Vec<f64> = contacts
+            .iter()
+            .map(|&c| p.contacts[c].dot(&self.s.v))
+            .collect();
+        let (mom0, ke0) = (self.momentum(), self.kinetic());
+        // Capture into persistent contact?
+        let mut captured = vec![false; contacts.len()];
+        for (k, &c) in contacts.iter().enumerate() {
+            let hist = &mut self.last_impacts[c];
+            hist.push_back(t);
+            if hist.len() > 3 {
+                hist.pop_front();
+            }
+            let accumulating = hist.len() == 3 && {
+                let (d1, d2) = (hist[1] - hist[0], hist[2] - hist[1]);
+                let r = d2 / d1;
+                d1 > 0.0
+                    && r < 1.0
+                    && d2 < p.h
+                    && d2 * r / (1.0 - r) < p.h
+                    && p.contacts[c].restitution < 1.0
+            };
+            captured[k] = p.options.persistent_contact
+                && (v_before[k] < p.options.capture_velocity || accumulating);
+        }
+        let e_eff: Vec<f64> = contacts
+            .iter()
+            .zip(&captured)
+            .map(|(&c, &cap)| if cap { 0.0 } else { p.contacts[c].restitution })
+            .collect();
+        let mut corrected = false;
+        let mut impulses: Vec<f64> = vec![0.0; contacts.len()];
+        let mut v_after_report: Vec<f64> = vec![0.0; contacts.len()];
+        match p.options.impulse {
+            ImpulseVariant::Consistent => {
+                let target: Vec<f64> = v_before
+                    .iter()
+                    .zip(&e_eff)
+                    .map(|(v, e)| (1.0 + e) * v.max(0.0))
+                    .collect();
+                let imp = impulse::lcp_impulses(&p.contacts, contacts, &target);
+                impulse::apply(&p.contacts, &imp, &mut self.s.v);
+                for (c, pc) in imp {
+                    let k = contacts.iter().position(|&x| x == c).unwrap();
+                    impulses[k] = pc;
+                }
+                for (k, &c) in contacts.iter().enumerate() {
+                    v_after_report[k] = p.contacts[c].dot(&self.s.v);
+                }
+            }
+            ImpulseVariant::Paper => {
+                let normal: Vec<usize> = contacts
+                    .iter()
+                    .zip(&captured)
+                    .filter(|(_, &cap)| !cap)
+                    .map(|(&c, _)| c)
+                    .collect();
+                let imp = impulse::apply_paper(&p.modal, &p.contacts, &normal, &mut self.s.v);
+                for (c, pc) in imp {
+                    let k = contacts.iter().position(|&x| x == c).unwrap();
+                    impulses[k] = pc;
+                }
+                for (k, &c) in contacts.iter().enumerate() {
+                    v_after_report[k] = p.contacts[c].dot(&self.s.v);
+                }
+                // Correction: contacts still approaching (or captured) get a consistent
+                // impulse to v⁺ = −e_eff v⁻.
+                let mut corr_set = vec![];
+                let mut target = vec![];
+                for (k, &c) in contacts.iter().enumerate() {
+                    let va = p.contacts[c].dot(&self.s.v);
+                    if captured[k] || va > 0.0 {
+                        if !captured[k] {
+                            corrected = true;
+                        }
+                        corr_set.push(c);
+                        target.push(va + e_eff[k] * v_before[k].max(0.0));
+                    }
+                }
+                if !corr_set.is_empty() {
+                    let imp = impulse::lcp_impulses(&p.contacts, &corr_set, &target);
+                    impulse::apply(&p.contacts, &imp, &mut self.s.v);
+                    for (c, pc) in imp {
+                        let k = contacts.iter().position(|&x| x == c).unwrap();
+                        impulses[k] += pc;
+                        if captured[k] {
+                            v_after_report[k] = p.contacts[c].dot(&self.s.v);
+                        }
+                    }
+                }
+                if corrected {
+                    self.diag.corrections += 1;
+                }
+            }
+        }
+        let (mom1, ke1) = (self.momentum(), self.kinetic());
+        self.energy.contact += ke0 - ke1;
+        for (k, &c) in contacts.iter().enumerate() {
+            let vb = v_before[k];
+            self.impacts.push(Impact {
+                contact: c,
+                time: t,
+                relative_velocity_before: vb,
+                relative_velocity_after: v_after_report[k],
+                achieved_restitution: if vb > 0.0 {
+                    -v_after_report[k] / vb
+                } else {
+                    0.0
+                },
+                impulse: impulses[k],
+                duration: None,
+                peak_force: None,
+                max_penetration: None,
+            });
+            self.stats.impacts += 1;
+            if captured[k] && !self.s.persistent.iter().any(|&(x, _)| x == c) {
+                self.s.persistent.push((c, t));
+                self.last_impacts[c].clear();
+            }
+        }
+        self.diag.impacts.push(ImpactDiagnostics {
+            time: t,
+            contacts: contacts.to_vec(),
+            momentum_before: mom0,
+            momentum_after: mom1,
+            kinetic_before: ke0,
+            kinetic_after: ke1,
+            corrected,
+            captured: captured.iter().any(|&c| c),
+        });
+        if !self.s.v.iter().sum::<f64>().is_finite() {
+            return Err(SolverError::NonFinite {
+                time: t,
+                context: "modal velocities after an impulse".into(),
+            });
+        }
+        Ok(())
+    }
+
+    /// Closes open phases and returns the final modal energy.
+    pub fn finish(&mut self) -> Result<f64, SolverError> {
+        if !self.state_is_finite() {
+            return Err(SolverError::NonFinite {
+                time: self.s.t,
+                context: "modal state at the end of the analysis".into(),
+            });
+        }
+        self.energy.input += self.win_acc.iter().sum::<f64>();
+        self.energy.damping += self.dmp_acc.iter().sum::<f64>();
+        self.win_acc.fill(0.0);
+        self.dmp_acc.fill(0.0);
+        for &(c, start) in &self.s.persistent {
+            self.phases.push(PersistentContact {
+                contact: c,
+                start,
+                end: self.s.t,
+                released_by: "end of analysis".into(),
+            });
+        }
+        self.s.persistent.clear();
+        self.diag.final_x = self.s.x.clone();
+        self.diag.final_v = self.s.v.clone();
+        Ok(self.p.modal.energy(&self.s.x, &self.s.v))
+    }
+}
