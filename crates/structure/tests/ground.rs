@@ -592,7 +592,7 @@ fn propagator_matches_rk4_entrywise() {
 fn propagator_constant_load_analytic() {
     // x'' + 2ζωx' + ω²x = F from rest: x = F/ω² (1 − e^{−ζωt}(cos ω_d t + ζω/ω_d sin ω_d t)).
     let (omega, f) = (2.0 * std::f64::consts::PI / 0.7, 3.5);
-    for zeta in [0.0, 0.05, 0.9] {
+    for zeta in [0.0f64, 0.05, 0.9] {
         let wd = omega * (1.0 - zeta * zeta).sqrt();
         for h in [1e-6, 1e-3, 0.05, 0.3] {
             let p = Propagator::new(omega, zeta, h);

@@ -8,8 +8,8 @@
 //!   Hermite interpolant's maximum plus its error bound τ⁴/384·max|δ⁗| (with
 //!   |q_n⁗| ≤ ω_n⁴·|A_n − iB_n| for the homogeneous part) — if that is < 0 nothing closes;
 //!   otherwise Brent on δ̇ locates the maximum s*, and if δ(s*) ≥ 0 Brent on δ over [0, s*];
-//! - δ₀ ≥ 0 (touching just after an impact or a release): δ̇₀ > 0 is an immediate
-//!   (zero-speed) closure; otherwise the minimum is located first and the crossing after it.
+//! - δ₀ ≥ 0 (touching just after an impact or a release): δ̇₀ > 0 with δ₁ ≥ 0 is an
+//!   immediate (zero-speed) closure (with δ₁ < 0 a round-off overlap, ignored); otherwise the minimum is located first and the crossing after it.
 
 use roots::Convergency;
 
@@ -142,7 +142,10 @@ impl Locator<'_> {
         let (lo, tau) = (self.lo, self.hi);
         if d0 >= 0.0 {
             if dd0 > 0.0 {
-                return Some(lo);
+                // Touching and approaching: a real closure only if δ is still ≥ 0 at the
+                // window end; otherwise it is a round-off-sized overlap (velocity residue of
+                // a plastic impulse or a release) that reopens at once.
+                return if d1 >= 0.0 { Some(lo) } else { None };
             }
             if dd1 <= 0.0 {
                 return None;

@@ -37,6 +37,12 @@ pub struct Problem {
     /// Propagators from a step start to its interior check points k·h/sub, k = 1 … sub−1
     /// (per point, per mode: a00 a01 b00 b01 a10 a11 b10 b11).
     pub checks: Vec<Vec<[f64; 8]>>,
+    /// ω_n².
+    pub omega2: Vec<f64>,
+    /// √(Σ_n Γ_n²), kg^½ (norm of the modal load per unit a_g).
+    pub gamma_norm: f64,
+    /// √W_cc per contact (Delassus diagonal), kg^−½.
+    pub sqrt_w: Vec<f64>,
     /// Number of base steps covering the duration (the last may be partial).
     pub n_steps: usize,
     /// Ground acceleration at the start and end of each base step, m/s² (zero past the record).
@@ -49,7 +55,7 @@ pub struct Problem {
 impl Problem {
     pub fn new(scene: &Scene) -> Result<Problem, SolverError> {
         let modal = Modal::new(&scene.buildings, scene.momentum.modes)?;
-        let contacts = scene
+        let contacts: Vec<ContactGeom> = scene
             .contacts
             .iter()
             .map(|c| ContactGeom::new(&modal, c))
@@ -87,7 +93,16 @@ impl Problem {
             }
         }
         let full = StepCoeffs::new(&modal, h);
+        let omega2 = modal.omega.iter().map(|w| w * w).collect();
+        let gamma_norm = modal.gamma.iter().map(|g| g * g).sum::<f64>().sqrt();
+        let sqrt_w = contacts
+            .iter()
+            .map(|c: &ContactGeom| c.dot(&c.g).sqrt())
+            .collect();
         Ok(Problem {
+            omega2,
+            gamma_norm,
+            sqrt_w,
             modal,
             contacts,
             options: scene.momentum.clone(),
@@ -193,6 +208,8 @@ pub struct Stepper<'a> {
     /// Per-mode energy sums of the fast path (input, damping), J; folded in by `finish`.
     win_acc: Vec<f64>,
     dmp_acc: Vec<f64>,
+    win_step: Vec<f64>,
+    dmp_step: Vec<f64>,
     shear_max: Vec<Vec<f64>>,
     stiffness: Vec<Vec<f64>>,
     u: Vec<Vec<f64>>,
@@ -242,6 +259,8 @@ impl<'a> Stepper<'a> {
             vn: vec![0.0; nm],
             win_acc: vec![0.0; nm],
             dmp_acc: vec![0.0; nm],
+            win_step: vec![0.0; nm],
+            dmp_step: vec![0.0; nm],
             disp_max: scene
                 .buildings
                 .iter()
@@ -416,7 +435,7 @@ impl<'a> Stepper<'a> {
             let nm = self.s.x.len();
             let (x, v) = (&self.s.x[..nm], &self.s.v[..nm]);
             let (xn, vn) = (&mut self.xn[..nm], &mut self.vn[..nm]);
-            let (win, dmp) = (&mut self.win_acc[..nm], &mut self.dmp_acc[..nm]);
+            let (win, dmp) = (&mut self.win_step[..nm], &mut self.dmp_step[..nm]);
             let (a00, a01, a10, a11) = (&c.a00[..nm], &c.a01[..nm], &c.a10[..nm], &c.a11[..nm]);
             let (b00, b01, b10, b11) = (&c.b00[..nm], &c.b01[..nm], &c.b10[..nm], &c.b11[..nm]);
             let (tzw, iw2, gam) = (&c.two_zw[..nm], &c.inv_w2[..nm], &p.modal.gamma[..nm]);
@@ -443,8 +462,8 @@ impl<'a> Stepper<'a> {
                 let x1 = a00[n] * x0 + a01[n] * v0 + b00[n] * f0 + b01[n] * f1;
                 let v1 = a10[n] * x0 + a11[n] * v0 + b10[n] * f0 + b11[n] * f1;
                 let ix = (0.5 * (f0 + f1) * h - (v1 - v0) - tzw[n] * (x1 - x0)) * iw2[n];
-                win[n] += f0 * (x1 - x0) + (f1 - f0) * (x1 - ix * inv_h);
-                dmp[n] += x0 * (q0[n] * x0 + q1[n] * v0 + q2[n] * f0 + q3[n] * f1)
+                win[n] = f0 * (x1 - x0) + (f1 - f0) * (x1 - ix * inv_h);
+                dmp[n] = x0 * (q0[n] * x0 + q1[n] * v0 + q2[n] * f0 + q3[n] * f1)
                     + v0 * (q4[n] * v0 + q5[n] * f0 + q6[n] * f1)
                     + f0 * (q7[n] * f0 + q8[n] * f1)
                     + q9[n] * f1 * f1;
@@ -452,11 +471,28 @@ impl<'a> Stepper<'a> {
                 vn[n] = v1;
             }
         }
+        // Rigorous skip of far contacts: d√(2E)/dt ≤ |f| (modal load norm), so over the step
+        // |δ̇| ≤ √W_c (√(2E₀) + h |a_g|max √ΣΓ²) and δ(s) ≤ δ₀ + s·max|δ̇| < 0 if δ₀ is
+        // below −h times that bound.
+        let e2 = {
+            let nm = self.s.x.len();
+            let (x, v, w2) = (&self.s.x[..nm], &self.s.v[..nm], &p.omega2[..nm]);
+            let mut acc = [0.0f64; 4];
+            for n in 0..nm {
+                acc[n % 4] += v[n] * v[n] + w2[n] * x[n] * x[n];
+            }
+            acc.iter().sum::<f64>()
+        };
+        let vbound = e2.sqrt() + h * a0.abs().max(a1.abs()) * p.gamma_norm;
         let sub = p.sub;
         let mut arcs_built = false;
-        for ct in &p.contacts {
+        for (ci, ct) in p.contacts.iter().enumerate() {
             // δ, δ̇ at the window ends 0, h/sub, …, h.
-            let mut prev = (ct.delta(&self.s.x), ct.dot(&self.s.v));
+            let d_start = ct.delta(&self.s.x);
+            if d_start < -h * p.sqrt_w[ci] * vbound * (1.0 + 1e-9) {
+                continue;
+            }
+            let mut prev = (d_start, ct.dot(&self.s.v));
             if prev.0 >= 0.0 {
                 return Ok(None);
             }
@@ -505,6 +541,13 @@ impl<'a> Stepper<'a> {
         }
         std::mem::swap(&mut self.s.x, &mut self.xn);
         std::mem::swap(&mut self.s.v, &mut self.vn);
+        // Energy of the accepted step only (a step with a possible event is discarded).
+        for (acc, w) in self.win_acc.iter_mut().zip(&self.win_step) {
+            *acc += w;
+        }
+        for (acc, d) in self.dmp_acc.iter_mut().zip(&self.dmp_step) {
+            *acc += d;
+        }
         self.finish_grid(j, t_end);
         self.count_step(h)?;
         self.observe();

@@ -1,0 +1,65 @@
+//! c_r < 1 under a sustained push: persistent contact, or a typed event storm.
+
+use solvers::momentum::solve;
+use solvers::SolverError;
+use structure::ground::GroundMotion;
+use structure::testing::free_scene;
+use structure::{Building, Contact};
+
+/// A soft building pushed into a stiff one by a constant ground acceleration.
+fn pushed(persistent: bool) -> structure::Scene {
+    let w1 = 2.0 * std::f64::consts::PI * 0.5;
+    let w2 = 2.0 * std::f64::consts::PI * 2.0;
+    let a = Building::new("soft", vec![1.0e6], vec![1.0e6 * w1 * w1], 0.05);
+    let b = Building::new("stiff", vec![1.0e6], vec![1.0e6 * w2 * w2], 0.05);
+    let c = Contact {
+        left: 0,
+        left_dof: 0,
+        right: 1,
+        right_dof: 0,
+        gap: 0.05,
+        restitution: 0.5,
+    };
+    let mut s = free_scene(vec![a, b], vec![c], 20.0);
+    // Static: u_soft = 2/w1² = 0.20 m, u_stiff = 0.013 m: the floors are held together.
+    s.ground = Some(GroundMotion {
+        name: "push".into(),
+        dt: 0.01,
+        accel: vec![-2.0; 2001],
+    });
+    s.momentum.persistent_contact = persistent;
+    s
+}
+
+#[test]
+fn chattering_ends_in_persistent_contact() {
+    let out = solve(&pushed(true), None).unwrap();
+    println!(
+        "impacts {} phases {:?}",
+        out.impacts.len(),
+        out.persistent_contacts
+    );
+    assert!(
+        !out.persistent_contacts.is_empty(),
+        "no persistent-contact phase"
+    );
+    let last = out.persistent_contacts.last().unwrap();
+    assert_eq!(last.released_by, "end of analysis");
+    assert!(last.start < 10.0);
+    assert!(out.impacts.len() < 500);
+    let e = &out.energy;
+    assert!(
+        e.balance_error.abs() < 1e-8 * e.input.abs().max(e.initial),
+        "{e:?}"
+    );
+    // Impacts before capture lose energy at e = 0.5.
+    assert!(e.contact > 0.0);
+}
+
+#[test]
+fn chattering_without_persistent_contact_is_an_event_storm() {
+    match solve(&pushed(false), None) {
+        Err(SolverError::EventStorm { impacts, .. }) => assert!(impacts > 10),
+        other => panic!("expected EventStorm, got {other:?}"),
+    }
+}
