@@ -41,7 +41,9 @@ fn tighter_tolerance_gives_smaller_error_on_the_paper_scene_at_k_1e10() {
     )
     .unwrap();
     let mut errs = Vec::new();
-    for tol in ["1e-3", "1e-4", "1e-5", "1e-6", "1e-7", "1e-8", "1e-9", "1e-10"] {
+    for tol in [
+        "1e-3", "1e-4", "1e-5", "1e-6", "1e-7", "1e-8", "1e-9", "1e-10",
+    ] {
         let s = paper(&[
             "gap_element.stiffness=1e10",
             &format!("gap_element.tolerance={tol}"),

@@ -437,6 +437,10 @@ pub fn apply_override(table: &mut toml::Table, expr: &str) -> Result<(), SceneEr
     Ok(())
 }
 
+/// Most floors the `stories = N` shorthand accepts (a guard against absurd allocations;
+/// an explicit `masses` list is bounded by the file itself).
+pub const MAX_STORIES: usize = 1_000;
+
 fn validate(raw: RawScene, origin: &str, base_dir: &Path) -> Result<Scene, SceneError> {
     let invalid = |key: String, message: String| SceneError::Invalid {
         file: origin.to_string(),
@@ -470,8 +474,11 @@ fn validate(raw: RawScene, origin: &str, base_dir: &Path) -> Result<Scene, Scene
         let masses: Vec<f64> = match (&rb.masses, rb.stories, rb.mass) {
             (Some(m), None, None) => m.clone(),
             (None, Some(n), Some(m)) => {
-                if n == 0 {
-                    return Err(invalid(key("stories"), "expected a whole number >= 1".into()));
+                if !(1..=MAX_STORIES).contains(&n) {
+                    return Err(invalid(
+                        key("stories"),
+                        format!("{n}: expected a whole number of floors in 1 ..= {MAX_STORIES}"),
+                    ));
                 }
                 vec![m; n]
             }
@@ -485,6 +492,12 @@ fn validate(raw: RawScene, origin: &str, base_dir: &Path) -> Result<Scene, Scene
                 ))
             }
         };
+        if masses.is_empty() {
+            return Err(invalid(
+                key("masses"),
+                "is empty: expected one mass (kg) per floor, at least one floor".into(),
+            ));
+        }
         if let Some((i, m)) = masses
             .iter()
             .enumerate()
@@ -526,7 +539,7 @@ fn validate(raw: RawScene, origin: &str, base_dir: &Path) -> Result<Scene, Scene
                     f[1],
                     zeta_list.ratio(0),
                 )
-                .map_err(model_err)?;
+                .map_err(|e| invalid(key("target_frequencies_hz"), e.to_string()))?;
                 (c.building.story_stiffness.clone(), Some(c))
             }
             (None, None) => {

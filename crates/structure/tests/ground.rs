@@ -525,6 +525,7 @@ fn pgv_pgd_catch_peaks_between_samples() {
 // ---------------------------------------------------------------------------------------
 
 /// Classical RK4 over [0, h] with `n` substeps, f linear from f0 to f1.
+#[allow(clippy::too_many_arguments)]
 fn rk4(omega: f64, zeta: f64, h: f64, n: usize, x0: f64, v0: f64, f0: f64, f1: f64) -> (f64, f64) {
     let f = |t: f64| f0 + (f1 - f0) * t / h;
     let s = h / n as f64;

@@ -532,7 +532,7 @@ impl GroundMotion {
         }
         for w in times.windows(2) {
             let step = w[1].0 - w[0].0;
-            if !((step - dt).abs() <= 1e-6 * dt) {
+            if step.is_nan() || (step - dt).abs() > 1e-6 * dt {
                 return Err(RecordError::NonUniform {
                     origin: origin.to_string(),
                     line: w[1].1,
@@ -685,7 +685,7 @@ impl GroundMotion {
     /// `t > duration` and NaN.
     pub fn accel_at(&self, t: f64) -> f64 {
         let n = self.accel.len();
-        if n == 0 || !(t >= 0.0) || t > self.duration() {
+        if n == 0 || t.is_nan() || t < 0.0 || t > self.duration() {
             return 0.0;
         }
         if n == 1 {

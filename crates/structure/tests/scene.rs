@@ -1,0 +1,819 @@
+//! Integration tests for `structure::scene`: the paper scene, `--set` overrides, shorthand
+//! forms, documented defaults, errors that name the key, and a property test that no input
+//! (arbitrary text, mutations of the paper scene, arbitrary overrides) makes the loader panic.
+//!
+//! The command-line side of the bad-input catalogue (exit code 2, no partial output) lives in
+//! `crates/studies/tests/cli_bad_input.rs`.
+
+use std::path::{Path, PathBuf};
+
+use proptest::prelude::*;
+use structure::ground::{RecordFormat, Units};
+use structure::scene::{ContactLaw, ImpulseVariant, Integrator, MAX_STORIES};
+use structure::testing::paper_scene_path;
+use structure::{Damping, Scene, SceneError, G};
+
+fn fixture(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/scenes")
+        .join(name)
+}
+
+fn fixtures_dir() -> PathBuf {
+    fixture("")
+}
+
+fn paper_dir() -> PathBuf {
+    paper_scene_path().parent().unwrap().to_path_buf()
+}
+
+fn paper_text() -> String {
+    std::fs::read_to_string(paper_scene_path()).unwrap()
+}
+
+fn load_str(text: &str, overrides: &[&str]) -> Result<Scene, SceneError> {
+    let o: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+    Scene::from_str_with_overrides(text, "test.toml", &fixtures_dir(), &o)
+}
+
+fn load_paper(overrides: &[&str]) -> Scene {
+    let o: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+    Scene::from_file_with_overrides(&paper_scene_path(), &o).unwrap()
+}
+
+/// Asserts that `r` is an error whose message contains every one of `parts`.
+#[track_caller]
+fn err_has(r: Result<Scene, SceneError>, parts: &[&str]) -> String {
+    let msg = match r {
+        Ok(_) => panic!("expected an error containing {parts:?}, the scene loaded"),
+        Err(e) => e.to_string(),
+    };
+    for p in parts {
+        assert!(msg.contains(p), "error {msg:?} should contain {p:?}");
+    }
+    msg
+}
+
+const TINY: &str = r#"
+[[buildings]]
+name = "a"
+masses = [1.0e5, 1.0e5]
+story_stiffness = [1.0e8, 1.0e8]
+
+[[buildings]]
+name = "b"
+masses = [1.2e5, 1.2e5]
+story_stiffness = [1.5e8, 1.5e8]
+
+[[contacts]]
+left = "a"
+left_floor = 2
+right = "b"
+right_floor = 2
+gap = 0.01
+
+[analysis]
+duration = 1.0
+"#;
+
+// ---------------------------------------------------------------------------------------
+// The paper scene
+// ---------------------------------------------------------------------------------------
+
+#[test]
+fn paper_scene_loads_and_is_calibrated() {
+    let s = Scene::from_file(&paper_scene_path()).unwrap();
+    assert_eq!(s.name, "paper-pair");
+    assert_eq!(s.file.as_deref(), Some(paper_scene_path().as_path()));
+    assert_eq!(s.buildings.len(), 2);
+    let targets = [("building1", [0.67, 2.23]), ("building2", [0.81, 3.06])];
+    for (b, (name, f)) in s.buildings.iter().zip(targets) {
+        assert_eq!(b.name, name);
+        assert_eq!(b.n_floors(), 15);
+        assert_eq!(b.story_stiffness.len(), 15);
+        assert_eq!(b.reference_frequencies_hz, f.to_vec());
+        assert_eq!(b.damping, Damping::Uniform(0.05));
+        let got = b.modes().unwrap().frequencies_hz();
+        for i in 0..2 {
+            assert!(
+                (got[i] - f[i]).abs() < 1e-6,
+                "{name} mode {}: {} Hz, target {} Hz",
+                i + 1,
+                got[i],
+                f[i]
+            );
+        }
+    }
+    // Building 2 is about 20 % more massive.
+    let ratio = s.buildings[1].total_mass() / s.buildings[0].total_mass();
+    assert!((ratio - 1.2).abs() < 1e-12, "mass ratio {ratio}");
+
+    assert_eq!(s.contacts.len(), 1);
+    let c = &s.contacts[0];
+    assert_eq!((c.left, c.left_dof, c.right, c.right_dof), (0, 14, 1, 14));
+    assert_eq!(c.gap, 0.10);
+    assert_eq!(c.restitution, 1.0);
+
+    let g = s
+        .ground
+        .as_ref()
+        .expect("the paper scene has a ground motion");
+    assert!((g.pga() - 0.40 * G).abs() < 1e-9 * G, "PGA {}", g.pga() / G);
+    let src = s.ground_source.as_ref().unwrap();
+    assert_eq!(src.format, RecordFormat::At2);
+    assert_eq!(src.pga_g, Some(0.40));
+    assert!(src.file.ends_with("RSN752_LOMAP_CAP000.AT2"));
+    // Without [analysis] duration the record's length is used.
+    assert_eq!(s.duration, g.duration());
+    assert_eq!(s.gap_element.law, ContactLaw::Linear);
+    assert_eq!(s.gap_element.stiffness, 1.0e10);
+}
+
+// ---------------------------------------------------------------------------------------
+// --set overrides
+// ---------------------------------------------------------------------------------------
+
+#[test]
+fn set_overrides_from_the_issue() {
+    let base = load_paper(&[]);
+    let s = load_paper(&[
+        "contacts.0.gap=0.05",
+        "ground_motion.pga=0.15",
+        "momentum.modes=10",
+        "gap_element.law=linear",
+    ]);
+    assert_eq!(s.contacts[0].gap, 0.05);
+    let g = s.ground.as_ref().unwrap();
+    assert!((g.pga() - 0.15 * G).abs() < 1e-9 * G);
+    assert_eq!(s.ground_source.as_ref().unwrap().pga_g, Some(0.15));
+    assert_eq!(s.momentum.modes, Some(10));
+    assert_eq!(s.gap_element.law, ContactLaw::Linear);
+    // Everything else is untouched.
+    assert_eq!(s.buildings, base.buildings);
+    assert_eq!(s.contacts[0].restitution, base.contacts[0].restitution);
+    assert_eq!(s.duration, base.duration);
+}
+
+#[test]
+fn set_bare_words_and_toml_values() {
+    // A bare word is a string; a quoted word too; TOML values keep their type.
+    let s = load_paper(&["gap_element.law=kelvin-voigt"]);
+    assert_eq!(s.gap_element.law, ContactLaw::KelvinVoigt);
+    let s = load_paper(&["gap_element.law=\"hertz-damp\""]);
+    assert_eq!(s.gap_element.law, ContactLaw::HertzDamp);
+    let s = load_paper(&[
+        "gap_element.integrator=newmark",
+        "gap_element.time_step=0.002",
+    ]);
+    assert_eq!(s.gap_element.integrator, Integrator::Newmark);
+    assert_eq!(s.gap_element.time_step, 0.002);
+    let s = load_paper(&[
+        "momentum.impulse=paper",
+        "momentum.persistent_contact=false",
+    ]);
+    assert_eq!(s.momentum.impulse, ImpulseVariant::Paper);
+    assert!(!s.momentum.persistent_contact);
+    // New tables and keys can be created; spaces around `=` are ignored.
+    let s = load_paper(&["analysis.duration = 5.0", "name=renamed"]);
+    assert_eq!(s.duration, 5.0);
+    assert_eq!(s.name, "renamed");
+    // Arrays index by number, also inside a building.
+    let s = load_str(
+        TINY,
+        &["buildings.1.masses.0=2.0e5", "contacts.0.restitution=0.5"],
+    )
+    .unwrap();
+    assert_eq!(s.buildings[1].masses, vec![2.0e5, 1.2e5]);
+    assert_eq!(s.contacts[0].restitution, 0.5);
+    // Whole arrays as TOML values.
+    let s = load_str(TINY, &["buildings.0.story_stiffness=[3e8, 2e8]"]).unwrap();
+    assert_eq!(s.buildings[0].story_stiffness, vec![3e8, 2e8]);
+    // Swapping pga for scale needs both edits; the later one wins.
+    let s = load_paper(&["ground_motion.pga=0.2", "ground_motion.pga=0.3"]);
+    assert_eq!(s.ground_source.unwrap().pga_g, Some(0.3));
+}
+
+#[test]
+fn set_errors_name_the_expression() {
+    let m = err_has(
+        load_str(TINY, &["contacts.3.gap=0.05"]),
+        &["--set contacts.3.gap=0.05"],
+    );
+    assert!(m.contains("out of range") && m.contains("1 entries"), "{m}");
+    err_has(
+        load_str(TINY, &["contacts.0.gap"]),
+        &["--set contacts.0.gap", "PATH=VALUE"],
+    );
+    err_has(load_str(TINY, &["=0.05"]), &["--set =0.05", "empty"]);
+    err_has(
+        load_str(TINY, &["contacts.first.gap=0.05"]),
+        &["contacts.first.gap", "numeric index", "`first`"],
+    );
+    err_has(
+        load_str(TINY, &["contacts.0.gap.x=1"]),
+        &["contacts.0.gap.x=1", "`contacts.0.gap` is a value"],
+    );
+    // An override that creates an unknown key is reported like one in the file.
+    err_has(
+        load_str(TINY, &["gap_element.stifness=1e9"]),
+        &["test.toml", "`stifness`", "gap_element", "--set"],
+    );
+    err_has(
+        load_str(TINY, &["gap_element.law=hertz"]),
+        &["test.toml", "`hertz`", "gap_element.law"],
+    );
+    // Overridden values are validated like any other.
+    err_has(
+        load_str(TINY, &["contacts.0.gap=-0.05"]),
+        &["test.toml", "contacts[0].gap", ">= 0"],
+    );
+}
+
+// ---------------------------------------------------------------------------------------
+// Shorthand forms and defaults
+// ---------------------------------------------------------------------------------------
+
+#[test]
+fn shorthand_forms() {
+    let s = Scene::from_file(&fixture("shorthand.toml")).unwrap();
+    assert_eq!(s.name, "shorthand");
+    let l = &s.buildings[0];
+    assert_eq!(l.masses, vec![5.0e5; 4]);
+    assert_eq!(l.story_stiffness, vec![8.0e8; 4]);
+    assert_eq!(l.damping, Damping::PerMode(vec![0.02, 0.03]));
+    assert_eq!(l.damping.ratio(3), 0.03, "the last ratio repeats");
+    let r = &s.buildings[1];
+    assert_eq!(r.initial_displacement, vec![0.001, 0.002, 0.003]);
+    assert_eq!(r.initial_velocity, vec![0.0, 0.0, -0.01]);
+    let c = &s.contacts[0];
+    assert_eq!((c.left_dof, c.right_dof), (3, 2));
+    assert_eq!(c.restitution, 1.0, "default restitution");
+
+    let src = s.ground_source.as_ref().unwrap();
+    assert_eq!(
+        src.format,
+        RecordFormat::OneColumn {
+            dt: 0.01,
+            units: Units::MetersPerSecond2
+        }
+    );
+    assert_eq!(src.factor, 2.0);
+    assert_eq!(src.pga_g, None);
+    let g = s.ground.as_ref().unwrap();
+    assert_eq!(g.npts(), 9);
+    assert_eq!(g.dt, 0.01);
+    assert!((g.pga() - 2.0).abs() < 1e-12, "1.0 m/s^2 scaled by 2");
+    assert!(
+        (s.duration - 0.08).abs() < 1e-12,
+        "duration = record length"
+    );
+
+    // The shorthand is the same building as the long form.
+    let long = TINY.replace(
+        "masses = [1.0e5, 1.0e5]\nstory_stiffness = [1.0e8, 1.0e8]",
+        "stories = 2\nmass = 1.0e5\nstory_stiffness = 1.0e8",
+    );
+    assert_ne!(long, TINY);
+    assert_eq!(
+        load_str(&long, &[]).unwrap().buildings,
+        load_str(TINY, &[]).unwrap().buildings
+    );
+}
+
+#[test]
+fn documented_defaults() {
+    let s = Scene::from_file(&fixture("minimal.toml")).unwrap();
+    assert_eq!(s.name, "scene");
+    let b = &s.buildings[0];
+    assert_eq!(b.damping, Damping::Uniform(0.05));
+    assert_eq!(b.initial_displacement, vec![0.0; 3]);
+    assert_eq!(b.initial_velocity, vec![0.0; 3]);
+    assert!(b.reference_frequencies_hz.is_empty());
+    assert!(s.contacts.is_empty());
+    assert!(s.ground.is_none() && s.ground_source.is_none());
+    assert_eq!(s.ground_accel(0.5), 0.0);
+    assert_eq!(s.duration, 2.0);
+
+    assert_eq!(s.momentum.modes, None);
+    assert_eq!(s.momentum.impulse, ImpulseVariant::Consistent);
+    assert!(s.momentum.persistent_contact);
+    assert_eq!(s.momentum.capture_velocity, 1e-4);
+
+    assert_eq!(s.gap_element.stiffness, 1.0e10);
+    assert_eq!(s.gap_element.law, ContactLaw::KelvinVoigt);
+    assert_eq!(s.gap_element.integrator, Integrator::Adaptive);
+    assert_eq!(s.gap_element.tolerance, 1.0e-8);
+    assert_eq!(s.gap_element.time_step, 1.0e-3);
+    assert!(!s.gap_element.tension);
+
+    assert_eq!(s.limits.max_impact_rate, 2000.0);
+    assert_eq!(s.limits.max_steps, 50_000_000);
+}
+
+#[test]
+fn record_format_inference_and_units() {
+    // Not *.at2: two-column, in g, factor 1 without pga/scale.
+    let text = format!("{TINY}\n[ground_motion]\nfile = \"pulse_two_column.txt\"\n")
+        .replace("[analysis]\nduration = 1.0\n", "");
+    let s = load_str(&text, &[]).unwrap();
+    let src = s.ground_source.as_ref().unwrap();
+    assert_eq!(src.format, RecordFormat::TwoColumn { units: Units::G });
+    assert_eq!(src.factor, 1.0);
+    let g = s.ground.as_ref().unwrap();
+    assert!((g.dt - 0.02).abs() < 1e-12);
+    assert!((g.pga() - 0.20 * G).abs() < 1e-12);
+    assert!((s.duration - 0.08).abs() < 1e-12);
+    // Units for two-column records.
+    let s = load_str(&text, &["ground_motion.units=cm/s^2"]).unwrap();
+    assert!((s.ground.unwrap().pga() - 0.002).abs() < 1e-12);
+    // A negative scale flips the record; zero is allowed (no excitation).
+    let s = load_str(&text, &["ground_motion.scale=-2"]).unwrap();
+    assert!((s.ground.unwrap().accel[2] - 0.40 * G).abs() < 1e-12);
+    // The paper's *.AT2 is read as AT2.
+    assert_eq!(
+        load_paper(&[]).ground_source.unwrap().format,
+        RecordFormat::At2
+    );
+}
+
+// ---------------------------------------------------------------------------------------
+// Errors name the file and key (the full catalogue runs the binary: cli_bad_input.rs)
+// ---------------------------------------------------------------------------------------
+
+#[test]
+fn unknown_keys_name_key_and_line() {
+    let cases = [
+        ("nme = \"x\"\n", "nme", "line 1"),
+        ("[[buildings]]\nname = \"a\"\nmass = 1.0\nstories = 1\nstory_stifness = 1.0\n", "story_stifness", "line 5"),
+        ("[[buildings]]\nname = \"a\"\nmasses = [1.0]\nstory_stiffness = [1.0]\n[gap_element]\nlaww = \"linear\"\n", "laww", "line 6"),
+        ("[[buildings]]\nname = \"a\"\nmasses = [1.0]\nstory_stiffness = [1.0]\n[analysis]\nduration = 1.0\nsteps = 3\n", "steps", "line 7"),
+    ];
+    for (text, key, line) in cases {
+        err_has(
+            load_str(text, &[]),
+            &["test.toml", &format!("`{key}`"), line],
+        );
+    }
+}
+
+#[test]
+fn validation_errors_name_the_key() {
+    let cases: &[(&str, &[&str])] = &[
+        ("buildings.0.masses.1=0", &["buildings[0].masses[1]", "> 0"]),
+        (
+            "buildings.0.masses.1=nan",
+            &["buildings[0].masses[1]", "finite"],
+        ),
+        (
+            "buildings.1.story_stiffness.0=-1e8",
+            &["buildings[1].story_stiffness[0]", "> 0"],
+        ),
+        (
+            "buildings.1.story_stiffness.0=inf",
+            &["buildings[1].story_stiffness[0]", "finite"],
+        ),
+        (
+            "buildings.0.story_stiffness=[1e8]",
+            &["buildings[0].story_stiffness", "expected 2"],
+        ),
+        (
+            "buildings.0.initial_velocity=[1.0]",
+            &["buildings[0]", "initial_velocity", "expected 2"],
+        ),
+        (
+            "buildings.0.damping_ratio=1.5",
+            &["buildings[0]", "damping_ratio", "< 1"],
+        ),
+        ("buildings.1.name=a", &["buildings[1].name", "twice"]),
+        ("contacts.0.left=zz", &["contacts[0].left", "`zz`", "a, b"]),
+        (
+            "contacts.0.right=a",
+            &["contacts[0].right", "different buildings"],
+        ),
+        (
+            "contacts.0.left_floor=3",
+            &["contacts[0].left_floor", "1 … 2"],
+        ),
+        (
+            "contacts.0.right_floor=0",
+            &["contacts[0].right_floor", "out of range"],
+        ),
+        ("contacts.0.gap=-0.01", &["contacts[0].gap", ">= 0"]),
+        (
+            "contacts.0.restitution=1.01",
+            &["contacts[0].restitution", "[0, 1]"],
+        ),
+        (
+            "contacts.0.restitution=-0.1",
+            &["contacts[0].restitution", "[0, 1]"],
+        ),
+        ("analysis.duration=0", &["analysis.duration", "> 0"]),
+        ("analysis.duration=-1", &["analysis.duration", "> 0"]),
+        ("momentum.modes=0", &["momentum.modes", ">= 1"]),
+        ("gap_element.stiffness=0", &["gap_element.stiffness", "> 0"]),
+        (
+            "gap_element.tolerance=0.1",
+            &["gap_element.tolerance", "(0, 0.1)"],
+        ),
+        (
+            "gap_element.tolerance=0",
+            &["gap_element.tolerance", "(0, 0.1)"],
+        ),
+        ("gap_element.time_step=0", &["gap_element.time_step", "> 0"]),
+        (
+            "gap_element.time_step=-0.001",
+            &["gap_element.time_step", "> 0"],
+        ),
+        (
+            "ground_motion.file=missing.at2",
+            &["ground_motion.file", "missing.at2", "does not exist"],
+        ),
+    ];
+    for (set, parts) in cases {
+        let mut all = vec!["test.toml"];
+        all.extend_from_slice(parts);
+        err_has(load_str(TINY, &[set]), &all);
+    }
+}
+
+#[test]
+fn ground_motion_errors_name_the_key() {
+    let text = format!("{TINY}\n[ground_motion]\nfile = \"pulse_two_column.txt\"\n");
+    let cases: &[(&[&str], &[&str])] = &[
+        (
+            &["ground_motion.pga=0.3", "ground_motion.scale=2"],
+            &["ground_motion.pga", "not both"],
+        ),
+        (&["ground_motion.pga=0"], &["ground_motion.pga", "> 0"]),
+        (&["ground_motion.pga=-0.3"], &["ground_motion.pga", "> 0"]),
+        (
+            &["ground_motion.scale=nan"],
+            &["ground_motion.scale", "finite"],
+        ),
+        (
+            &["ground_motion.units=furlongs"],
+            &["ground_motion.units", "furlongs"],
+        ),
+        (
+            &["ground_motion.format=csv"],
+            &["ground_motion.format", "`csv`"],
+        ),
+        (
+            &["ground_motion.dt=0.01"],
+            &["ground_motion.dt", "two-column"],
+        ),
+        (
+            &["ground_motion.format=one-column"],
+            &["ground_motion.dt", "missing"],
+        ),
+        (
+            &["ground_motion.format=one-column", "ground_motion.dt=0"],
+            &["ground_motion.dt", "> 0"],
+        ),
+        (
+            &["ground_motion.format=one-column", "ground_motion.dt=-0.01"],
+            &["ground_motion.dt", "> 0"],
+        ),
+        // The record reader's own message comes through with the scene's key.
+        (
+            &["ground_motion.format=at2"],
+            &["ground_motion.file", "pulse_two_column.txt", "line 4"],
+        ),
+    ];
+    for (sets, parts) in cases {
+        let mut all = vec!["test.toml"];
+        all.extend_from_slice(parts);
+        err_has(load_str(&text, sets), &all);
+    }
+}
+
+#[test]
+fn missing_fields_name_the_field() {
+    err_has(
+        load_str("name = \"x\"\n", &[]),
+        &["test.toml", "`buildings`"],
+    );
+    err_has(
+        load_str("buildings = []\n[analysis]\nduration = 1.0\n", &[]),
+        &["buildings", "at least one"],
+    );
+    let no_mass =
+        "[[buildings]]\nname = \"a\"\nstory_stiffness = [1.0]\n[analysis]\nduration = 1.0\n";
+    err_has(load_str(no_mass, &[]), &["buildings[0].masses", "missing"]);
+    let no_k = "[[buildings]]\nname = \"a\"\nmasses = [1.0]\n[analysis]\nduration = 1.0\n";
+    err_has(
+        load_str(no_k, &[]),
+        &["buildings[0].story_stiffness", "missing"],
+    );
+    let no_duration = "[[buildings]]\nname = \"a\"\nmasses = [1.0]\nstory_stiffness = [1.0]\n";
+    err_has(
+        load_str(no_duration, &[]),
+        &["analysis.duration", "missing"],
+    );
+    let no_name = "[[buildings]]\nmasses = [1.0]\nstory_stiffness = [1.0]\n";
+    err_has(load_str(no_name, &[]), &["test.toml", "`name`"]);
+    let no_gap = TINY.replace("gap = 0.01\n", "");
+    err_has(load_str(&no_gap, &[]), &["test.toml", "`gap`"]);
+    let no_file = format!("{TINY}\n[ground_motion]\npga = 0.3\n");
+    err_has(load_str(&no_file, &[]), &["test.toml", "`file`"]);
+}
+
+#[test]
+fn shorthand_and_calibration_errors_name_the_key() {
+    let b =
+        |body: &str| format!("[[buildings]]\nname = \"a\"\n{body}\n[analysis]\nduration = 1.0\n");
+    err_has(
+        load_str(&b("stories = 0\nmass = 1.0\nstory_stiffness = 1.0"), &[]),
+        &["buildings[0].stories", "1 ..= "],
+    );
+    let too_many = format!(
+        "stories = {}\nmass = 1.0\nstory_stiffness = 1.0",
+        MAX_STORIES + 1
+    );
+    err_has(load_str(&b(&too_many), &[]), &["buildings[0].stories"]);
+    let huge = "stories = 9223372036854775807\nmass = 1.0\nstory_stiffness = 1.0";
+    err_has(load_str(&b(huge), &[]), &["buildings[0].stories"]);
+    err_has(
+        load_str(&b("stories = 3\nstory_stiffness = 1.0"), &[]),
+        &["buildings[0].masses", "missing"],
+    );
+    err_has(
+        load_str(
+            &b("masses = [1.0]\nstories = 1\nmass = 1.0\nstory_stiffness = 1.0"),
+            &[],
+        ),
+        &["buildings[0].masses", "not both"],
+    );
+    err_has(
+        load_str(&b("stories = 3\nmass = 1.0\nstory_stiffness = 1.0\ntarget_frequencies_hz = [1.0, 3.0]"), &[]),
+        &["buildings[0].target_frequencies_hz", "not both"],
+    );
+    err_has(
+        load_str(
+            &b("stories = 3\nmass = 1.0\ntarget_frequencies_hz = [1.0]"),
+            &[],
+        ),
+        &["buildings[0].target_frequencies_hz", "expected 2"],
+    );
+    err_has(
+        load_str(
+            &b("masses = [1.0, 2.0]\ntarget_frequencies_hz = [1.0, 3.0]"),
+            &[],
+        ),
+        &["buildings[0].target_frequencies_hz", "uniform"],
+    );
+    err_has(
+        load_str(
+            &b("stories = 1\nmass = 1.0\ntarget_frequencies_hz = [1.0, 3.0]"),
+            &[],
+        ),
+        &["buildings[0].target_frequencies_hz", "2 floors"],
+    );
+    err_has(
+        load_str(
+            &b("stories = 3\nmass = 1.0\ntarget_frequencies_hz = [3.0, 1.0]"),
+            &[],
+        ),
+        &["buildings[0].target_frequencies_hz", "f1 < f2"],
+    );
+}
+
+// ---------------------------------------------------------------------------------------
+// No input makes the loader panic
+// ---------------------------------------------------------------------------------------
+
+/// Values that stress validation: non-positive, non-finite, huge, tiny, wrong types.
+const NASTY_VALUES: &[&str] = &[
+    "0",
+    "-1",
+    "1",
+    "2",
+    "15",
+    "16",
+    "100",
+    "0.5",
+    "1e308",
+    "-1e308",
+    "1e-320",
+    "nan",
+    "inf",
+    "-inf",
+    "9223372036854775807",
+    "-9223372036854775808",
+    "\"\"",
+    "\"building1\"",
+    "\"building2\"",
+    "\"linear\"",
+    "\"x\"",
+    "true",
+    "[]",
+    "[1.0]",
+    "[0.67, 2.23]",
+    "[1e300, 1e301]",
+    "[1e-300, 2e-300]",
+    "[0.0, 0.0]",
+    "[nan, 1]",
+    "{}",
+    "[[1]]",
+    "1979-05-27",
+    "'''\n'''",
+];
+
+/// Overridable paths of the paper scene and some that do not exist.
+const PATHS: &[&str] = &[
+    "name",
+    "buildings.0.stories",
+    "buildings.1.mass",
+    "buildings.0.masses",
+    "buildings.0.story_stiffness",
+    "buildings.1.target_frequencies_hz",
+    "buildings.0.damping_ratio",
+    "buildings.0.initial_velocity",
+    "buildings.2.name",
+    "contacts.0.gap",
+    "contacts.0.left",
+    "contacts.0.right_floor",
+    "contacts.0.restitution",
+    "contacts.1",
+    "ground_motion.pga",
+    "ground_motion.scale",
+    "ground_motion.file",
+    "ground_motion.format",
+    "ground_motion.dt",
+    "ground_motion.units",
+    "analysis.duration",
+    "analysis.max_steps",
+    "analysis.max_impact_rate",
+    "momentum.modes",
+    "momentum.impulse",
+    "momentum.capture_velocity",
+    "gap_element.stiffness",
+    "gap_element.law",
+    "gap_element.tolerance",
+    "gap_element.time_step",
+    "gap_element.integrator",
+    "buildings",
+    "contacts",
+    "x.y.z",
+    "buildings.x",
+    "contacts.0.gap.deeper",
+    "",
+];
+
+#[derive(Debug, Clone)]
+enum Mutation {
+    /// Delete `len` characters at `at`.
+    Delete { at: prop::sample::Index, len: usize },
+    /// Insert text at `at`.
+    Insert {
+        at: prop::sample::Index,
+        text: String,
+    },
+    /// Replace what follows `=` on a line with a nasty value.
+    Value {
+        line: prop::sample::Index,
+        value: &'static str,
+    },
+    /// Duplicate a line after itself.
+    Duplicate { line: prop::sample::Index },
+    /// Swap two lines.
+    Swap {
+        a: prop::sample::Index,
+        b: prop::sample::Index,
+    },
+    /// Replace a line with arbitrary text.
+    Line {
+        line: prop::sample::Index,
+        text: String,
+    },
+}
+
+fn mutation() -> impl Strategy<Value = Mutation> {
+    let idx = any::<prop::sample::Index>;
+    // Mostly value edits: they keep the text valid TOML and reach validation.
+    prop_oneof![
+        1 => (idx(), 1usize..40).prop_map(|(at, len)| Mutation::Delete { at, len }),
+        1 => (idx(), "\\PC{0,16}|[\\[\\]=\"'.,{}#\n0-9a-z_-]{0,8}")
+            .prop_map(|(at, text)| Mutation::Insert { at, text }),
+        6 => (idx(), prop::sample::select(NASTY_VALUES))
+            .prop_map(|(line, value)| Mutation::Value { line, value }),
+        1 => idx().prop_map(|line| Mutation::Duplicate { line }),
+        1 => (idx(), idx()).prop_map(|(a, b)| Mutation::Swap { a, b }),
+        1 => (idx(), "\\PC{0,30}").prop_map(|(line, text)| Mutation::Line { line, text }),
+    ]
+}
+
+fn apply(text: &str, m: &Mutation) -> String {
+    let chars: Vec<char> = text.chars().collect();
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    if lines.is_empty() {
+        lines.push(String::new());
+    }
+    match m {
+        Mutation::Delete { at, len } => {
+            let i = at.index(chars.len() + 1);
+            let j = (i + len).min(chars.len());
+            chars[..i].iter().chain(&chars[j..]).collect()
+        }
+        Mutation::Insert { at, text } => {
+            let i = at.index(chars.len() + 1);
+            let mut s: String = chars[..i].iter().collect();
+            s.push_str(text);
+            s.extend(&chars[i..]);
+            s
+        }
+        Mutation::Value { line, value } => {
+            let i = line.index(lines.len());
+            if let Some((k, _)) = lines[i].split_once('=') {
+                lines[i] = format!("{k}= {value}");
+            }
+            lines.join("\n")
+        }
+        Mutation::Duplicate { line } => {
+            let i = line.index(lines.len());
+            let l = lines[i].clone();
+            lines.insert(i, l);
+            lines.join("\n")
+        }
+        Mutation::Swap { a, b } => {
+            let (i, j) = (a.index(lines.len()), b.index(lines.len()));
+            lines.swap(i, j);
+            lines.join("\n")
+        }
+        Mutation::Line { line, text } => {
+            let i = line.index(lines.len());
+            lines[i] = text.clone();
+            lines.join("\n")
+        }
+    }
+}
+
+fn tiny_with_record() -> String {
+    format!("{TINY}\n[ground_motion]\nfile = \"pulse_two_column.txt\"\npga = 0.3\n")
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
+
+    #[test]
+    fn arbitrary_text_never_panics(text in "\\PC{0,400}") {
+        let _ = Scene::from_str_with_overrides(&text, "fuzz.toml", Path::new("."), &[]);
+    }
+
+    #[test]
+    fn toml_shaped_text_never_panics(
+        text in "(\\[\\[?(buildings|contacts|ground_motion|analysis|momentum|gap_element)\\]\\]?\n|[a-z_]{1,22} = (-?[0-9.e]{1,8}|\"[a-z0-9]{0,9}\"|\\[[-0-9., e]{0,20}\\]|true|nan|inf)\n){0,30}"
+    ) {
+        let _ = Scene::from_str_with_overrides(&text, "fuzz.toml", &fixtures_dir(), &[]);
+    }
+
+    #[test]
+    fn mutated_tiny_scene_never_panics(ms in prop::collection::vec(mutation(), 1..5)) {
+        let mut text = tiny_with_record();
+        for m in &ms {
+            text = apply(&text, m);
+        }
+        let _ = Scene::from_str_with_overrides(&text, "fuzz.toml", &fixtures_dir(), &[]);
+    }
+
+    #[test]
+    fn arbitrary_overrides_never_panic(
+        sets in prop::collection::vec(
+            prop_oneof![
+                (prop::sample::select(PATHS), prop::sample::select(NASTY_VALUES))
+                    .prop_map(|(p, v)| format!("{p}={v}")),
+                "\\PC{0,30}",
+            ],
+            1..4,
+        )
+    ) {
+        let _ = Scene::from_str_with_overrides(&tiny_with_record(), "fuzz.toml", &fixtures_dir(), &sets);
+    }
+}
+
+proptest! {
+    // The paper scene calibrates two 15-storey sticks and reads an 8000-point record per
+    // case: fewer cases.
+    #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
+
+    #[test]
+    fn mutated_paper_scene_never_panics(ms in prop::collection::vec(mutation(), 1..4)) {
+        let mut text = paper_text();
+        for m in &ms {
+            text = apply(&text, m);
+        }
+        let _ = Scene::from_str_with_overrides(&text, "fuzz.toml", &paper_dir(), &[]);
+    }
+
+    #[test]
+    fn paper_scene_with_arbitrary_overrides_never_panics(
+        sets in prop::collection::vec(
+            (prop::sample::select(PATHS), prop::sample::select(NASTY_VALUES))
+                .prop_map(|(p, v)| format!("{p}={v}")),
+            1..4,
+        )
+    ) {
+        let o: Vec<String> = sets;
+        let _ = Scene::from_str_with_overrides(&paper_text(), "fuzz.toml", &paper_dir(), &o);
+    }
+}

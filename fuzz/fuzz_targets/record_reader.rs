@@ -1,0 +1,58 @@
+//! Fuzz target: the ground-motion record reader on arbitrary UTF-8 text, in all three
+//! layouts (PEER AT2, two-column, one-column). Any input must give `Ok` or an error, never
+//! a panic; a record that parses must have finite, well-defined peaks.
+//!
+//! The first byte picks the units and the time step of the one-column layout; the rest is
+//! the file's text.
+
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+use structure::ground::{GroundMotion, Units};
+
+fn exercise(g: &GroundMotion) {
+    assert!(g.dt.is_finite() && g.dt > 0.0, "dt {}", g.dt);
+    assert!(g.npts() >= 2);
+    assert!(g.accel.iter().all(|a| a.is_finite()));
+    let _ = g.pga();
+    let _ = g.pgv();
+    let _ = g.pgd();
+    let _ = g.accel_at(0.5 * g.duration());
+    let _ = g.accel_at(-1.0);
+    let _ = g.accel_at(2.0 * g.duration() + 1.0);
+}
+
+fuzz_target!(|data: &[u8]| {
+    let Some((&selector, rest)) = data.split_first() else {
+        return;
+    };
+    let Ok(text) = std::str::from_utf8(rest) else {
+        return;
+    };
+    let units = match selector % 3 {
+        0 => Units::G,
+        1 => Units::MetersPerSecond2,
+        _ => Units::CentimetersPerSecond2,
+    };
+    let dt = match selector / 3 % 4 {
+        0 => 0.005,
+        1 => 0.02,
+        2 => 1.0e-9,
+        _ => 0.0, // invalid: must be refused
+    };
+    if let Ok(g) = GroundMotion::from_at2_str(text, "fuzz.at2") {
+        exercise(&g);
+    }
+    if let Ok(g) = GroundMotion::from_two_column_str(text, "fuzz.txt", units) {
+        exercise(&g);
+    }
+    match GroundMotion::from_one_column_str(text, "fuzz.dat", dt, units) {
+        Ok(g) => {
+            assert!(dt > 0.0, "dt = {dt} must be refused");
+            exercise(&g);
+        }
+        Err(e) => {
+            let _ = e.to_string();
+        }
+    }
+});
