@@ -80,6 +80,80 @@ enum Command {
         #[arg(long)]
         history: Option<PathBuf>,
     },
+    /// Export a scene to another program; the script is printed on stdout.
+    Export {
+        #[command(subcommand)]
+        target: ExportTarget,
+    },
+    /// Parameter studies: run sweeps (resumable, shardable) and merge shards.
+    Studies {
+        #[command(subcommand)]
+        command: StudiesCommand,
+    },
+}
+
+#[derive(Subcommand)]
+enum ExportTarget {
+    /// An OpenSeesPy script of the scene (zeroLength springs, modal damping, gap elements,
+    /// the embedded record); run it as `python model.py out.json` to get the `pound run`
+    /// JSON layout. Compare with `pound run SCENE --method gap --set
+    /// gap_element.integrator=newmark`.
+    Opensees {
+        /// Scene file (TOML).
+        scene: PathBuf,
+        /// Override a scene value: PATH=VALUE on a dotted TOML path (repeatable).
+        #[arg(long = "set", value_name = "PATH=VALUE")]
+        set: Vec<String>,
+    },
+}
+
+#[derive(Subcommand)]
+enum StudiesCommand {
+    /// Run studies and write their tables and figures under OUT/<study>/.
+    ///
+    /// Finished cases are cached in OUT/<study>/cases/<id>.json and skipped on a rerun.
+    /// With --shard i/n (default: SLURM_ARRAY_TASK_ID/SLURM_ARRAY_TASK_COUNT when set) only
+    /// every n-th case runs and only case files are written; `pound studies merge` then
+    /// checks coverage and writes the tables and figures.
+    Run {
+        /// Studies to run: paper, stiffness, modes, restitution, gap, cost, stability.
+        names: Vec<String>,
+        /// Run every study.
+        #[arg(long)]
+        all: bool,
+        /// Output folder.
+        #[arg(long, default_value = "results")]
+        out: PathBuf,
+        /// Folder holding the study definitions (<name>.toml) and the scenes they name.
+        #[arg(long, default_value = "studies")]
+        studies_dir: PathBuf,
+        /// Run studies 2-5 (stiffness, modes, restitution, gap) on these records instead of
+        /// the four Loma Prieta components (PEER AT2, or two-column time/acceleration in g).
+        #[arg(long, num_args = 1..)]
+        records: Vec<PathBuf>,
+        /// Run one part of the sweep: cases with index % n == i - 1.
+        #[arg(long, value_name = "i/n")]
+        shard: Option<String>,
+        /// Worker threads (default: one per core).
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Small grids, one record, 12 s of analysis (smoke tests).
+        #[arg(long)]
+        quick: bool,
+    },
+    /// Merge shard outputs (output folders of `studies run --shard`), check that every case
+    /// is present (listing missing ids otherwise) and write the tables and figures.
+    Merge {
+        /// Output folders of the shards (each holding <study>/manifest.json and cases/).
+        #[arg(required = true)]
+        dirs: Vec<PathBuf>,
+        /// Where to write the merged results (default: the first folder).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Folder holding the scenes the studies name.
+        #[arg(long, default_value = "studies")]
+        studies_dir: PathBuf,
+    },
 }
 
 #[derive(Args)]
@@ -240,6 +314,129 @@ fn run(cli: Cli) -> Result<()> {
                 Some(p) => io::write_run(&p, &result)?,
                 None => print!("{}", report::run_summary(&scene, &result)),
             }
+        }
+        Command::Export {
+            target: ExportTarget::Opensees { scene, set },
+        } => {
+            let scene = load_scene(&scene, &set)?;
+            let script = studies::export::opensees_script(&scene).map_err(input)?;
+            for w in studies::export::opensees_caveats(&scene) {
+                eprintln!("warning: {w}");
+            }
+            print!("{script}");
+        }
+        Command::Studies { command } => studies_command(command)?,
+    }
+    Ok(())
+}
+
+fn studies_command(command: StudiesCommand) -> Result<()> {
+    use studies::studies as st;
+    match command {
+        StudiesCommand::Run {
+            names,
+            all,
+            out,
+            studies_dir,
+            records,
+            shard,
+            threads,
+            quick,
+        } => {
+            let names: Vec<String> = if all {
+                st::NAMES.iter().map(|s| s.to_string()).collect()
+            } else {
+                names
+            };
+            if names.is_empty() {
+                return Err(input(format!(
+                    "name at least one study or give --all (studies: {})",
+                    st::NAMES.join(", ")
+                )));
+            }
+            for n in &names {
+                if st::study(n).is_none() {
+                    return Err(input(format!(
+                        "unknown study `{n}` (studies: {})",
+                        st::NAMES.join(", ")
+                    )));
+                }
+            }
+            if threads == Some(0) {
+                return Err(input("--threads 0: expected at least 1"));
+            }
+            let shard = match shard {
+                Some(s) => Some(s.parse::<studies::sweep::Shard>().map_err(input)?),
+                None => studies::sweep::Shard::from_slurm(),
+            };
+            let mut recs = Vec::new();
+            for r in &records {
+                if !r.is_file() {
+                    return Err(input(format!("--records: {} does not exist", r.display())));
+                }
+                recs.push(std::path::absolute(r)?.display().to_string());
+            }
+            let cfg = st::RunConfig {
+                out: out.clone(),
+                studies_dir,
+                threads,
+                shard,
+                opts: st::StudyOptions {
+                    quick,
+                    records: recs,
+                },
+                progress: true,
+            };
+            let t0 = std::time::Instant::now();
+            let mut timings = serde_json::Map::new();
+            for n in &names {
+                let r = st::run_study(n, &cfg).with_context(|| format!("study `{n}`"))?;
+                eprintln!(
+                    "{:<12} {} cases: {} run ({} failed), {} cached, {} in other shards; {:.1} s{}",
+                    r.name,
+                    r.summary.total,
+                    r.summary.ran,
+                    r.summary.failed,
+                    r.summary.skipped,
+                    r.summary.other_shards,
+                    r.wall_seconds,
+                    if r.reported {
+                        format!(" -> {}", out.join(n).display())
+                    } else {
+                        " (shard: case files only)".into()
+                    }
+                );
+                timings.insert(
+                    n.clone(),
+                    serde_json::json!({
+                        "wall_seconds": r.wall_seconds,
+                        "cases": r.summary.total,
+                        "ran": r.summary.ran,
+                        "cached": r.summary.skipped,
+                        "failed": r.summary.failed,
+                    }),
+                );
+            }
+            let total = t0.elapsed().as_secs_f64();
+            if shard.is_none() {
+                let doc = serde_json::json!({
+                    "studies": timings,
+                    "total_wall_seconds": total,
+                    "threads": threads.unwrap_or_else(rayon::current_num_threads),
+                    "quick": quick,
+                });
+                io::write_json(&out.join("timing.json"), &doc)?;
+            }
+            eprintln!("total wall time {total:.1} s");
+        }
+        StudiesCommand::Merge {
+            dirs,
+            out,
+            studies_dir,
+        } => {
+            let out = out.unwrap_or_else(|| dirs[0].clone());
+            let merged = st::merge(&dirs, &out, &studies_dir)?;
+            eprintln!("merged {} into {}", merged.join(", "), out.display());
         }
     }
     Ok(())

@@ -1,0 +1,469 @@
+//! The studies: definitions (`studies/<name>.toml`), case lists, tables, figures, readings.
+//!
+//! Every study expands its definition into [`CaseSpec`]s; the driver adds the no-impact
+//! baseline of every case ([`CaseSpec::baseline`]: contact pushed 1 km away, everything else
+//! equal, so the amplification factor compares like with like), runs them with the sweep
+//! engine, then (unless sharded) reads the case files back and writes
+//! `<out>/<study>/{cases.csv,cases.json,*.csv,*.md,*.png,*.svg,summary.md}`.
+//!
+//! Outputs whose name contains `cpu` (and `cost/summary.md`, and the `cases*` files) hold
+//! wall-clock times; everything else is deterministic.
+
+pub mod cost;
+pub mod gap;
+pub mod modes;
+pub mod paper;
+pub mod restitution;
+pub mod stability;
+pub mod stiffness;
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use serde::{Deserialize, Serialize};
+use solvers::Method;
+
+use crate::io::{write_atomic, write_json};
+use crate::sweep::{
+    collect, dedup, run_cases, write_cases_table, CaseOutputs, CaseSpec, EngineOptions, Result,
+    Results, RunSummary, Shard, StudyError,
+};
+use crate::table::Table;
+
+/// All studies, in the order `--all` runs them.
+pub const NAMES: [&str; 7] = [
+    "paper",
+    "stiffness",
+    "modes",
+    "restitution",
+    "gap",
+    "cost",
+    "stability",
+];
+
+/// Options that change the case list (kept in the manifest so a merge rebuilds the same).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct StudyOptions {
+    /// Small grids, one record, 12 s of analysis (for tests).
+    pub quick: bool,
+    /// Records replacing the definition's (studies 2–5); absolute paths.
+    pub records: Vec<String>,
+}
+
+/// What a study sees.
+pub struct Ctx {
+    pub name: String,
+    pub def: toml::Table,
+    pub def_file: String,
+    pub opts: StudyOptions,
+    pub studies_dir: PathBuf,
+    /// `<out>/<study>`.
+    pub dir: PathBuf,
+}
+
+impl Ctx {
+    /// The definition as the study's own type (unknown keys are errors).
+    pub fn def<T: serde::de::DeserializeOwned>(&self) -> Result<T> {
+        toml::Value::Table(self.def.clone())
+            .try_into()
+            .map_err(|e: toml::de::Error| StudyError::Definition {
+                file: self.def_file.clone(),
+                message: e.to_string().trim_end().to_string(),
+            })
+    }
+
+    /// The records to use: `--records` if given (and `user_records` is true for the study),
+    /// else the definition's; the first one only with `--quick`.
+    pub fn records(&self, def: &[String], user_records: bool) -> Vec<String> {
+        let mut r: Vec<String> = if user_records && !self.opts.records.is_empty() {
+            self.opts.records.clone()
+        } else {
+            def.to_vec()
+        };
+        if self.opts.quick {
+            r.truncate(1);
+        }
+        r
+    }
+
+    /// A case of `scene` with `method` on `record` scaled to `pga` (12 s long with --quick).
+    pub fn case(&self, scene: &str, method: Method, record: &str, pga: f64) -> CaseSpec {
+        let mut c = CaseSpec::new(scene, method)
+            .record(record, Some(pga))
+            .param("record", record_label(record));
+        if self.opts.quick {
+            c = c.with("analysis.duration", "12.0");
+        }
+        c
+    }
+}
+
+/// Short label of a record file: its stem without the PEER `RSN…_…_` prefix.
+pub fn record_label(path: &str) -> String {
+    let stem = Path::new(path)
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| path.to_string());
+    match stem.rsplit_once('_') {
+        Some((pre, last)) if pre.starts_with("RSN") => last.to_string(),
+        _ => stem,
+    }
+}
+
+/// A study: its cases and its report.
+pub trait Study: Sync {
+    fn cases(&self, ctx: &Ctx) -> Result<Vec<CaseSpec>>;
+    fn report(&self, ctx: &Ctx, res: &Results) -> Result<()>;
+}
+
+pub fn study(name: &str) -> Option<&'static dyn Study> {
+    Some(match name {
+        "paper" => &paper::Paper,
+        "stiffness" => &stiffness::Stiffness,
+        "modes" => &modes::Modes,
+        "restitution" => &restitution::Restitution,
+        "gap" => &gap::Gap,
+        "cost" => &cost::Cost,
+        "stability" => &stability::Stability,
+        _ => return None,
+    })
+}
+
+/// Per-study manifest, written by every run and shard; `merge` rebuilds the case list from
+/// it.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Manifest {
+    pub study: String,
+    /// The study definition (TOML text) the cases were built from.
+    pub definition: String,
+    pub options: StudyOptions,
+    pub ids: Vec<String>,
+}
+
+/// How to run studies.
+#[derive(Debug, Clone)]
+pub struct RunConfig {
+    pub out: PathBuf,
+    pub studies_dir: PathBuf,
+    pub threads: Option<usize>,
+    pub shard: Option<Shard>,
+    pub opts: StudyOptions,
+    pub progress: bool,
+}
+
+/// What happened to one study.
+#[derive(Debug, Clone)]
+pub struct StudyRun {
+    pub name: String,
+    pub summary: RunSummary,
+    /// Tables and figures written (false for a shard).
+    pub reported: bool,
+    pub wall_seconds: f64,
+}
+
+fn make_ctx(
+    name: &str,
+    definition: &str,
+    def_file: &str,
+    cfg: &RunConfig,
+    opts: &StudyOptions,
+) -> Result<Ctx> {
+    let def: toml::Table = toml::from_str(definition).map_err(|e| StudyError::Definition {
+        file: def_file.to_string(),
+        message: e.to_string().trim_end().to_string(),
+    })?;
+    Ok(Ctx {
+        name: name.to_string(),
+        def,
+        def_file: def_file.to_string(),
+        opts: opts.clone(),
+        studies_dir: cfg.studies_dir.clone(),
+        dir: cfg.out.join(name),
+    })
+}
+
+/// The full case list of a study: its cases followed by their baselines, without repeats.
+pub fn all_cases(st: &dyn Study, ctx: &Ctx) -> Result<Vec<CaseSpec>> {
+    let cases = st.cases(ctx)?;
+    let baselines: Vec<CaseSpec> = cases.iter().map(|c| c.baseline()).collect();
+    Ok(dedup(cases.into_iter().chain(baselines).collect()))
+}
+
+fn read_definition(cfg: &RunConfig, name: &str) -> Result<(String, String)> {
+    let path = cfg.studies_dir.join(format!("{name}.toml"));
+    let text = std::fs::read_to_string(&path).map_err(|e| StudyError::Read {
+        path: path.display().to_string(),
+        message: e.to_string(),
+    })?;
+    Ok((text, path.display().to_string()))
+}
+
+/// Runs one study (all its missing cases, or a shard of them) and, unless sharded, writes
+/// its tables, figures and summary.
+pub fn run_study(name: &str, cfg: &RunConfig) -> Result<StudyRun> {
+    let t0 = Instant::now();
+    let st = study(name).ok_or_else(|| {
+        StudyError::Other(format!(
+            "unknown study `{name}` (studies: {})",
+            NAMES.join(", ")
+        ))
+    })?;
+    let (text, file) = read_definition(cfg, name)?;
+    let ctx = make_ctx(name, &text, &file, cfg, &cfg.opts)?;
+    let specs = all_cases(st, &ctx)?;
+    write_json(
+        &ctx.dir.join("manifest.json"),
+        &Manifest {
+            study: name.into(),
+            definition: text,
+            options: cfg.opts.clone(),
+            ids: specs.iter().map(|s| s.id.clone()).collect(),
+        },
+    )?;
+    let summary = run_cases(
+        &specs,
+        &EngineOptions {
+            study_dir: ctx.dir.clone(),
+            studies_dir: cfg.studies_dir.clone(),
+            threads: cfg.threads,
+            shard: cfg.shard,
+            progress: cfg.progress,
+        },
+    )?;
+    let reported = cfg.shard.is_none();
+    if reported {
+        report(st, &ctx, &specs)?;
+    }
+    Ok(StudyRun {
+        name: name.into(),
+        summary,
+        reported,
+        wall_seconds: t0.elapsed().as_secs_f64(),
+    })
+}
+
+fn report(st: &dyn Study, ctx: &Ctx, specs: &[CaseSpec]) -> Result<()> {
+    let res = collect(&ctx.name, specs, &ctx.dir)?;
+    write_cases_table(&ctx.dir, &res)?;
+    st.report(ctx, &res)
+}
+
+/// Merges shard outputs: `dirs` are output roots (each with `<study>/manifest.json` and
+/// `<study>/cases/`); case files are gathered into `out`, coverage is checked (an error
+/// lists the missing ids) and the reports are written. Returns the studies merged.
+pub fn merge(dirs: &[PathBuf], out: &Path, studies_dir: &Path) -> Result<Vec<String>> {
+    let mut merged = Vec::new();
+    for name in NAMES {
+        let manifests: Vec<PathBuf> = dirs
+            .iter()
+            .map(|d| d.join(name).join("manifest.json"))
+            .filter(|p| p.is_file())
+            .collect();
+        let Some(first) = manifests.first() else {
+            continue;
+        };
+        let text = std::fs::read_to_string(first).map_err(|e| StudyError::Read {
+            path: first.display().to_string(),
+            message: e.to_string(),
+        })?;
+        let m: Manifest = serde_json::from_str(&text).map_err(|e| StudyError::Read {
+            path: first.display().to_string(),
+            message: e.to_string(),
+        })?;
+        let cfg = RunConfig {
+            out: out.to_path_buf(),
+            studies_dir: studies_dir.to_path_buf(),
+            threads: None,
+            shard: None,
+            opts: m.options.clone(),
+            progress: false,
+        };
+        let st = study(name).expect("known study");
+        let ctx = make_ctx(
+            name,
+            &m.definition,
+            &format!("{} (definition)", first.display()),
+            &cfg,
+            &m.options,
+        )?;
+        let specs = all_cases(st, &ctx)?;
+        let dest = out.join(name).join("cases");
+        for d in dirs {
+            let src = d.join(name).join("cases");
+            if std::fs::canonicalize(&src).ok() == std::fs::canonicalize(&dest).ok() {
+                continue;
+            }
+            for s in &specs {
+                let from = src.join(format!("{}.json", s.id));
+                let to = dest.join(format!("{}.json", s.id));
+                if !to.is_file() && from.is_file() {
+                    let bytes = std::fs::read(&from).map_err(|e| StudyError::Read {
+                        path: from.display().to_string(),
+                        message: e.to_string(),
+                    })?;
+                    write_atomic(&to, &bytes)?;
+                }
+            }
+        }
+        write_json(
+            &ctx.dir.join("manifest.json"),
+            &Manifest {
+                study: name.into(),
+                definition: m.definition.clone(),
+                options: m.options.clone(),
+                ids: specs.iter().map(|s| s.id.clone()).collect(),
+            },
+        )?;
+        report(st, &ctx, &specs)?;
+        merged.push(name.to_string());
+    }
+    if merged.is_empty() {
+        return Err(StudyError::Other(format!(
+            "no study manifests found under {}",
+            dirs.iter()
+                .map(|d| d.display().to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        )));
+    }
+    Ok(merged)
+}
+
+// ---------------------------------------------------------------------------------------
+// Helpers shared by the studies
+
+/// Amplification factors per building and story: V_max with impact / V_max without.
+pub fn amplification(res: &Results, case: &CaseSpec) -> Option<Vec<Vec<f64>>> {
+    let with = res.out(case)?;
+    let without = res.out(&case.baseline())?;
+    Some(
+        with.story_shear_max
+            .iter()
+            .zip(&without.story_shear_max)
+            .map(|(a, b)| a.iter().zip(b).map(|(x, y)| x / y).collect())
+            .collect(),
+    )
+}
+
+/// Amplification at the top story of building `b`.
+pub fn amp_top(res: &Results, case: &CaseSpec, b: usize) -> Option<f64> {
+    amplification(res, case).and_then(|a| a.get(b).and_then(|v| v.last().copied()))
+}
+
+/// Largest relative story-shear difference |V − V_ref| / V_ref over every story of every
+/// building.
+pub fn shear_error(o: &CaseOutputs, reference: &CaseOutputs) -> f64 {
+    let mut e: f64 = 0.0;
+    for (a, r) in o.story_shear_max.iter().zip(&reference.story_shear_max) {
+        for (x, y) in a.iter().zip(r) {
+            e = e.max((x - y).abs() / y.abs());
+        }
+    }
+    e
+}
+
+/// Least-squares slope and intercept of y on x.
+pub fn fit_line(pts: &[(f64, f64)]) -> Option<(f64, f64)> {
+    let n = pts.len() as f64;
+    if pts.len() < 2 {
+        return None;
+    }
+    let (sx, sy) = pts.iter().fold((0.0, 0.0), |a, p| (a.0 + p.0, a.1 + p.1));
+    let (mx, my) = (sx / n, sy / n);
+    let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
+    let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    if sxx == 0.0 {
+        return None;
+    }
+    let slope = sxy / sxx;
+    Some((slope, my - slope * mx))
+}
+
+/// `count` log-spaced values from `lo` to `hi`, rounded to 4 significant digits so the
+/// overrides are short and stable.
+pub fn logspace(lo: f64, hi: f64, count: usize) -> Vec<f64> {
+    let (a, b) = (lo.log10(), hi.log10());
+    (0..count)
+        .map(|i| {
+            let x = 10f64.powf(a + (b - a) * i as f64 / (count.max(2) - 1) as f64);
+            format!("{x:.3e}").parse().unwrap_or(x)
+        })
+        .collect()
+}
+
+/// Writes `summary.md`: title, reading, tables, figure links.
+pub fn write_summary(
+    ctx: &Ctx,
+    title: &str,
+    reading: &[String],
+    tables: &[&Table],
+    figures: &[(&str, &str)],
+) -> Result<()> {
+    let mut s = format!("## {title}\n\n");
+    for r in reading {
+        s.push_str(r);
+        s.push(' ');
+    }
+    s = s.trim_end().to_string();
+    s.push_str("\n\n");
+    for (stem, caption) in figures {
+        s.push_str(&format!(
+            "![{caption}](results/{}/{stem}.png)\n\n*{caption}*\n\n",
+            ctx.name
+        ));
+    }
+    for t in tables {
+        s.push_str(&t.markdown());
+        s.push('\n');
+    }
+    write_atomic(&ctx.dir.join("summary.md"), s.as_bytes())?;
+    Ok(())
+}
+
+/// Mean of the finite values.
+pub fn mean(v: impl IntoIterator<Item = f64>) -> Option<f64> {
+    let (mut s, mut n) = (0.0, 0usize);
+    for x in v.into_iter().filter(|x| x.is_finite()) {
+        s += x;
+        n += 1;
+    }
+    (n > 0).then(|| s / n as f64)
+}
+
+/// The deserialisation default for the analysis PGA (g).
+pub fn default_pga() -> f64 {
+    0.40
+}
+
+/// The default record set: the four Loma Prieta components, relative to `studies/`.
+pub fn default_records() -> Vec<String> {
+    [
+        "RSN752_LOMAP_CAP000.AT2",
+        "RSN752_LOMAP_CAP090.AT2",
+        "RSN767_LOMAP_G03000.AT2",
+        "RSN767_LOMAP_G03090.AT2",
+    ]
+    .iter()
+    .map(|f| format!("../data/ground-motions/{f}"))
+    .collect()
+}
+
+/// Finished/failed counts as a sentence fragment.
+pub fn failures_note(res: &Results) -> Option<String> {
+    let failed: Vec<_> = res.iter().filter(|r| r.status != "ok").collect();
+    if failed.is_empty() {
+        return None;
+    }
+    let mut kinds: Vec<String> = failed
+        .iter()
+        .map(|r| r.error_kind.clone().unwrap_or_default())
+        .collect();
+    kinds.sort();
+    kinds.dedup();
+    Some(format!(
+        "{} of {} cases stopped with a solver error ({}); they are rows with their reason in cases.csv.",
+        failed.len(),
+        res.order.len(),
+        kinds.join(", ")
+    ))
+}

@@ -1,0 +1,304 @@
+//! Study 7 (`stability`): where the methods fail. Fixed-step Newmark over a (dt, k) grid
+//! (energy balance and restitution errors), adaptive cost against k, the paper impulse
+//! variant's restitution violation against modes, chattering with and without the
+//! persistent-contact phase.
+
+use serde::Deserialize;
+use solvers::Method;
+
+use super::{default_pga, failures_note, logspace, record_label, write_summary, Ctx, Study};
+use crate::plot::{figure, Heat, Marker, Panel, PanelKind, Series};
+use crate::sweep::{CaseSpec, Result, Results};
+use crate::table::{e, f, Table};
+
+pub struct Stability;
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Def {
+    scene: String,
+    #[serde(default = "default_pga")]
+    pga: f64,
+    record: String,
+    gap: f64,
+    newmark_step: Vec<f64>,
+    newmark_stiffness: Vec<f64>,
+    adaptive_stiffness_count: usize,
+    max_modes: usize,
+    chatter_restitution: Vec<f64>,
+}
+
+fn shrink(ctx: &Ctx, d: &mut Def) {
+    if ctx.opts.quick {
+        d.newmark_step.truncate(2);
+        d.newmark_stiffness.truncate(2);
+        d.adaptive_stiffness_count = 3;
+        d.max_modes = 3;
+        d.chatter_restitution.truncate(1);
+    }
+}
+
+fn base(ctx: &Ctx, d: &Def, m: Method, cr: f64) -> CaseSpec {
+    ctx.case(&d.scene, m, &d.record, d.pga)
+        .with("contacts.0.gap", format!("{:?}", d.gap))
+        .with("contacts.0.restitution", format!("{cr:?}"))
+}
+
+fn newmark(ctx: &Ctx, d: &Def, dt: f64, k: f64) -> CaseSpec {
+    base(ctx, d, Method::Gap, 1.0)
+        .with("gap_element.law", "linear")
+        .with("gap_element.integrator", "newmark")
+        .with("gap_element.stiffness", format!("{k:e}"))
+        .with("gap_element.time_step", format!("{dt:e}"))
+        .param("variant", "newmark")
+}
+
+fn adaptive(ctx: &Ctx, d: &Def, k: f64) -> CaseSpec {
+    base(ctx, d, Method::Gap, 1.0)
+        .with("gap_element.law", "linear")
+        .with("gap_element.integrator", "adaptive")
+        .with("gap_element.stiffness", format!("{k:e}"))
+        .param("variant", "adaptive")
+}
+
+fn paper_modes(ctx: &Ctx, d: &Def, n: usize, variant: &str) -> CaseSpec {
+    base(ctx, d, Method::Momentum, 1.0)
+        .with("momentum.impulse", variant)
+        .with("momentum.modes", n)
+        .param("variant", variant)
+}
+
+fn chatter(ctx: &Ctx, d: &Def, cr: f64, persistent: bool) -> CaseSpec {
+    base(ctx, d, Method::Momentum, cr)
+        .with("momentum.persistent_contact", persistent)
+        .param("variant", format!("chatter persistent={persistent}"))
+}
+
+fn ks(d: &Def) -> Vec<f64> {
+    logspace(1e7, 1e13, d.adaptive_stiffness_count)
+}
+
+impl Study for Stability {
+    fn cases(&self, ctx: &Ctx) -> Result<Vec<CaseSpec>> {
+        let mut d: Def = ctx.def()?;
+        shrink(ctx, &mut d);
+        let mut v = Vec::new();
+        for &k in &d.newmark_stiffness {
+            for &dt in &d.newmark_step {
+                v.push(newmark(ctx, &d, dt, k));
+            }
+        }
+        for k in ks(&d) {
+            v.push(adaptive(ctx, &d, k));
+        }
+        for n in 1..=d.max_modes {
+            for var in ["paper", "consistent"] {
+                v.push(paper_modes(ctx, &d, n, var));
+            }
+        }
+        for &cr in &d.chatter_restitution {
+            for p in [true, false] {
+                v.push(chatter(ctx, &d, cr, p));
+            }
+        }
+        Ok(v)
+    }
+
+    fn report(&self, ctx: &Ctx, res: &Results) -> Result<()> {
+        let mut d: Def = ctx.def()?;
+        shrink(ctx, &mut d);
+        let mut reading = Vec::new();
+        // (a) Newmark grid.
+        let mut tn = Table::new(
+            &format!("Fixed-step Newmark, linear gap element, c_r = 1, {}: relative energy balance error |balance| / input and restitution error max |c_r,achieved − 1|", record_label(&d.record)),
+            &["k (N/m)", "dt (s)", "energy error", "restitution error", "impacts", "status"],
+        );
+        let mut heat_e = Heat {
+            title: "Newmark: energy balance error / input".into(),
+            x_label: "time step (s)".into(),
+            y_label: "k (N/m)".into(),
+            log_x: true,
+            log_y: true,
+            log_value: true,
+            value_range: (1e-8, 1.0),
+            ..Default::default()
+        };
+        let mut heat_r = Heat {
+            title: "Newmark: restitution error".into(),
+            x_label: "time step (s)".into(),
+            y_label: "k (N/m)".into(),
+            log_x: true,
+            log_y: true,
+            log_value: true,
+            value_range: (1e-4, 1.0),
+            ..Default::default()
+        };
+        let mut worst_r: (f64, String) = (0.0, String::new());
+        for &k in &d.newmark_stiffness {
+            for &dt in &d.newmark_step {
+                let c = newmark(ctx, &d, dt, k);
+                let r = res.get(&c);
+                let o = r.ok();
+                let ee = o.map(|o| o.energy_balance_error.abs() / o.energy_input.abs().max(1e-300));
+                let re = o.and_then(|o| match (o.restitution_min, o.restitution_max) {
+                    (Some(a), Some(b)) => Some((a - 1.0).abs().max((b - 1.0).abs())),
+                    _ => None,
+                });
+                if let Some(x) = re {
+                    if x > worst_r.0 {
+                        worst_r = (x, format!("k = {k:.0e} N/m, dt = {dt:.0e} s"));
+                    }
+                }
+                tn.push(vec![
+                    format!("{k:.0e}"),
+                    format!("{dt:.0e}"),
+                    e(ee, 2),
+                    e(re, 2),
+                    o.map_or("–".into(), |o| o.impacts.to_string()),
+                    r.error_kind
+                        .clone()
+                        .map_or(r.status.clone(), |x| format!("failed: {x}")),
+                ]);
+                heat_e.cells.push((dt, k, ee));
+                heat_r.cells.push((dt, k, re.or(o.map(|_| 0.0))));
+            }
+        }
+        reading.push(format!("Fixed-step Newmark misses the restitution law by up to {:.2} ({}); the error shrinks only when a contact spans many steps (small dt, soft k).", worst_r.0, worst_r.1));
+        // (b) adaptive cost.
+        let mut ta = Table::new(
+            "Adaptive gap element: cost against k (linear law, tol 1e-8)",
+            &["k (N/m)", "steps", "rejected", "rhs evaluations", "impacts"],
+        );
+        let mut pa = Vec::new();
+        for k in ks(&d) {
+            let c = adaptive(ctx, &d, k);
+            let o = res.out(&c);
+            ta.push(vec![
+                format!("{k:.3e}"),
+                o.map_or("–".into(), |o| o.steps.to_string()),
+                o.map_or("–".into(), |o| o.rejected_steps.to_string()),
+                o.map_or("–".into(), |o| o.rhs_evaluations.to_string()),
+                o.map_or("–".into(), |o| o.impacts.to_string()),
+            ]);
+            if let Some(o) = o {
+                pa.push((k, o.rhs_evaluations as f64));
+            }
+        }
+        if let (Some(a), Some(b)) = (pa.first(), pa.last()) {
+            reading.push(format!("The adaptive integrator needs {:.0} right-hand-side evaluations at k = {:.0e} and {:.0} at k = {:.0e} N/m (×{:.2}).", a.1, a.0, b.1, b.0, b.1 / a.1));
+        }
+        // (c) paper variant restitution violation.
+        let mut tp = Table::new(
+            "Momentum method, c_r = 1: achieved restitution (min over impacts) against modes kept",
+            &[
+                "modes",
+                "paper impulse: min c_r",
+                "paper: violation 1 − min",
+                "consistent impulse: min c_r",
+            ],
+        );
+        let (mut vp, mut vc) = (Vec::new(), Vec::new());
+        for n in 1..=d.max_modes {
+            let p = res
+                .out(&paper_modes(ctx, &d, n, "paper"))
+                .and_then(|o| o.restitution_min);
+            let c = res
+                .out(&paper_modes(ctx, &d, n, "consistent"))
+                .and_then(|o| o.restitution_min);
+            tp.push(vec![
+                n.to_string(),
+                f(p, 4),
+                f(p.map(|x| 1.0 - x), 4),
+                f(c, 4),
+            ]);
+            if let Some(p) = p {
+                vp.push((n as f64, (1.0 - p).max(1e-16)));
+            }
+            if let Some(c) = c {
+                vc.push((n as f64, (1.0 - c).abs().max(1e-16)));
+            }
+        }
+        if let Some(p) = vp.first() {
+            reading.push(format!("The paper's floor-mass impulse with {} mode(s) violates the restitution law by up to {:.2} and with {} modes by {:.1e}.", p.0, p.1, vp.last().map_or(0.0, |q| q.0), vp.last().map_or(0.0, |q| q.1)));
+        }
+        // (d) chattering.
+        let mut tc = Table::new(
+            "Chattering: momentum method with and without the persistent-contact phase",
+            &[
+                "c_r",
+                "persistent contact",
+                "status",
+                "impacts",
+                "persistent phases",
+                "reason",
+            ],
+        );
+        for &cr in &d.chatter_restitution {
+            for p in [true, false] {
+                let r = res.get(&chatter(ctx, &d, cr, p));
+                tc.push(vec![
+                    cr.to_string(),
+                    p.to_string(),
+                    r.error_kind
+                        .clone()
+                        .map_or(r.status.clone(), |k| format!("failed: {k}")),
+                    r.ok().map_or("–".into(), |o| o.impacts.to_string()),
+                    r.ok()
+                        .map_or("–".into(), |o| o.persistent_contacts.to_string()),
+                    r.error.clone().unwrap_or_default(),
+                ]);
+            }
+        }
+        if let Some(cr) = d.chatter_restitution.first() {
+            let on = res.get(&chatter(ctx, &d, *cr, true));
+            let off = res.get(&chatter(ctx, &d, *cr, false));
+            reading.push(format!(
+                "At c_r = {cr} the run with the persistent-contact phase finishes ({} impacts, {} phases); without it the run ends as {}.",
+                on.ok().map_or(0, |o| o.impacts),
+                on.ok().map_or(0, |o| o.persistent_contacts),
+                off.error_kind.clone().unwrap_or_else(|| "ok".into())
+            ));
+        }
+        let pa_panel = Panel {
+            title: "Adaptive gap element: cost against k".into(),
+            x_label: "k (N/m)".into(),
+            y_label: "rhs evaluations".into(),
+            log_x: true,
+            log_y: true,
+            series: vec![Series::line("rhs evaluations", pa, 0).marker(Marker::Circle)],
+            no_legend: true,
+            ..Default::default()
+        };
+        let pv_panel = Panel {
+            title: "Restitution violation against modes (c_r = 1)".into(),
+            x_label: "modes kept".into(),
+            y_label: "1 − min achieved c_r".into(),
+            log_y: true,
+            series: vec![
+                Series::line("paper impulse", vp, 1).marker(Marker::Circle),
+                Series::line("consistent impulse", vc, 0).marker(Marker::Triangle),
+            ],
+            legend_right: true,
+            ..Default::default()
+        };
+        figure(&ctx.dir, "stability", (1200, 940), (2, 2), &[PanelKind::Heat(heat_e), PanelKind::Heat(heat_r), PanelKind::Xy(pa_panel), PanelKind::Xy(pv_panel)],
+            "Where methods fail: fixed-step Newmark errors over (dt, k); adaptive cost against k; the paper impulse's restitution violation.")?;
+        tn.write(&ctx.dir, "newmark_grid")?;
+        ta.write(&ctx.dir, "adaptive_cost")?;
+        tp.write(&ctx.dir, "paper_variant")?;
+        tc.write(&ctx.dir, "chattering")?;
+        if let Some(n) = failures_note(res) {
+            reading.push(n);
+        }
+        write_summary(
+            ctx,
+            "Study 7: where methods fail",
+            &reading,
+            &[&tn, &tc],
+            &[(
+                "stability",
+                "Newmark error maps, adaptive cost, restitution violation",
+            )],
+        )
+    }
+}

@@ -1,0 +1,766 @@
+//! The sweep engine: cases with stable ids, parallel and resumable execution, shards.
+//!
+//! A study expands into a list of [`CaseSpec`]s (a base scene file, `--set` overrides, a
+//! record, a method). Each case has a stable id, the FNV-1a hash of its canonical
+//! parameters (scene path, method, record, PGA, sorted overrides, history flag, repeats),
+//! so it is the same on every machine and in every run. Cases run in parallel with rayon;
+//! results are collected in case order, so nothing downstream depends on the thread count.
+//!
+//! Every finished case is written at once to `<out>/<study>/cases/<id>.json` (atomically);
+//! a rerun loads those files and skips the cases. With a shard `i/n` only the cases whose
+//! index satisfies `index % n == i − 1` run. A failed case (bad scene, solver error, even a
+//! panic) is a result with its reason, never a crashed sweep.
+//!
+//! Reports are always built from the case files as read back from disk, so a single run, a
+//! resumed run and a merge of shards produce bit-identical tables and figures.
+
+use std::collections::BTreeMap;
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use solvers::{History, Method, SolverError};
+use structure::Scene;
+
+use crate::io::{write_atomic, write_json, OutputError};
+
+/// Errors of the sweep engine and of the studies.
+#[derive(Debug, thiserror::Error)]
+pub enum StudyError {
+    #[error(transparent)]
+    Output(#[from] OutputError),
+    #[error("{file}: {message}")]
+    Definition { file: String, message: String },
+    #[error("cannot read {path}: {message}")]
+    Read { path: String, message: String },
+    #[error("study `{study}`: {missing} of {total} cases have no result (missing ids: {ids})")]
+    Incomplete {
+        study: String,
+        missing: usize,
+        total: usize,
+        ids: String,
+    },
+    #[error("{0}")]
+    Other(String),
+}
+
+pub type Result<T> = std::result::Result<T, StudyError>;
+
+/// FNV-1a, 64 bits: a hash that is the same everywhere (unlike Rust's seeded hasher).
+pub fn fnv1a64(bytes: &[u8]) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for b in bytes {
+        h ^= *b as u64;
+        h = h.wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    h
+}
+
+/// One analysis to run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CaseSpec {
+    /// Stable id (16 hex digits), see [`CaseSpec::compute_id`].
+    pub id: String,
+    /// Base scene file, relative to the studies folder (or absolute).
+    pub scene: String,
+    pub method: Method,
+    /// Ground-motion record replacing the scene's: relative to the studies folder, or absolute.
+    pub record: Option<String>,
+    /// Target PGA (g) of the record.
+    pub pga: Option<f64>,
+    /// `PATH=VALUE` overrides, sorted.
+    pub set: Vec<String>,
+    /// Keep the top-floor displacement histories of the contact floors.
+    pub history: bool,
+    /// Run this many times and keep the fastest wall time (cost studies).
+    pub repeat: u32,
+    /// Labels for tables; not part of the id.
+    pub params: BTreeMap<String, serde_json::Value>,
+}
+
+impl CaseSpec {
+    /// A case of `scene` with `method`; add overrides with [`CaseSpec::with`].
+    pub fn new(scene: &str, method: Method) -> Self {
+        let mut c = CaseSpec {
+            id: String::new(),
+            scene: scene.to_string(),
+            method,
+            record: None,
+            pga: None,
+            set: Vec::new(),
+            history: false,
+            repeat: 1,
+            params: BTreeMap::new(),
+        };
+        c.compute_id();
+        c
+    }
+
+    /// Adds (or replaces) an override `path=value`.
+    pub fn with(mut self, path: &str, value: impl std::fmt::Display) -> Self {
+        let prefix = format!("{path}=");
+        self.set.retain(|s| !s.starts_with(&prefix));
+        self.set.push(format!("{path}={value}"));
+        self.set.sort();
+        self.compute_id();
+        self
+    }
+
+    /// Removes every override whose path starts with `prefix`.
+    pub fn without(mut self, prefix: &str) -> Self {
+        self.set.retain(|s| !s.starts_with(prefix));
+        self.compute_id();
+        self
+    }
+
+    pub fn record(mut self, record: &str, pga: Option<f64>) -> Self {
+        self.record = Some(record.to_string());
+        self.pga = pga;
+        self.compute_id();
+        self
+    }
+
+    pub fn history(mut self, on: bool) -> Self {
+        self.history = on;
+        self.compute_id();
+        self
+    }
+
+    pub fn repeat(mut self, n: u32) -> Self {
+        self.repeat = n.max(1);
+        self.compute_id();
+        self
+    }
+
+    pub fn param(mut self, key: &str, value: impl Into<serde_json::Value>) -> Self {
+        self.params.insert(key.to_string(), value.into());
+        self
+    }
+
+    /// The canonical text hashed into the id.
+    pub fn canonical(&self) -> String {
+        let mut s = format!("scene={}\nmethod={}\n", self.scene, self.method);
+        if let Some(r) = &self.record {
+            s.push_str(&format!("record={r}\n"));
+        }
+        if let Some(p) = self.pga {
+            s.push_str(&format!("pga={p:e}\n"));
+        }
+        let mut set = self.set.clone();
+        set.sort();
+        for o in set {
+            s.push_str(&format!("set={o}\n"));
+        }
+        if self.history {
+            s.push_str("history\n");
+        }
+        if self.repeat > 1 {
+            s.push_str(&format!("repeat={}\n", self.repeat));
+        }
+        s
+    }
+
+    pub fn compute_id(&mut self) {
+        self.id = format!("{:016x}", fnv1a64(self.canonical().as_bytes()));
+    }
+
+    /// The value of override `path`, if set.
+    pub fn get(&self, path: &str) -> Option<&str> {
+        let prefix = format!("{path}=");
+        self.set
+            .iter()
+            .find_map(|s| s.strip_prefix(prefix.as_str()))
+    }
+
+    /// The same analysis without impact: every contact pushed 1 km away, contact-law
+    /// options dropped (they cannot matter), integrator options kept.
+    pub fn baseline(&self) -> CaseSpec {
+        let mut b = self.clone();
+        b.set.retain(|s| {
+            !(s.starts_with("contacts.")
+                || s.starts_with("gap_element.stiffness=")
+                || s.starts_with("gap_element.law=")
+                || s.starts_with("gap_element.tension=")
+                || s.starts_with("momentum.impulse=")
+                || s.starts_with("momentum.persistent_contact=")
+                || s.starts_with("momentum.capture_velocity="))
+        });
+        b.params = BTreeMap::new();
+        b.params.insert("baseline".into(), true.into());
+        b.repeat = 1;
+        b = b.with("contacts.0.gap", "1000.0").history(true);
+        b
+    }
+
+    fn resolve(path: &str, studies_dir: &Path) -> PathBuf {
+        let p = Path::new(path);
+        if p.is_absolute() {
+            p.to_path_buf()
+        } else {
+            studies_dir.join(p)
+        }
+    }
+
+    /// Loads the scene of this case.
+    pub fn load_scene(&self, studies_dir: &Path) -> std::result::Result<Scene, String> {
+        let mut set = self.set.clone();
+        if let Some(r) = &self.record {
+            let path = Self::resolve(r, studies_dir);
+            let abs = std::path::absolute(&path).unwrap_or(path);
+            set.push(format!("ground_motion.file={}", abs.display()));
+            if let Some(p) = self.pga {
+                set.push(format!("ground_motion.pga={p:?}"));
+            }
+        }
+        Scene::from_file_with_overrides(&Self::resolve(&self.scene, studies_dir), &set)
+            .map_err(|e| e.to_string())
+    }
+}
+
+/// Displacement histories of the two floors of contact 0.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ContactHistory {
+    pub time: Vec<f64>,
+    /// Left floor of contact 0, m.
+    pub u_left: Vec<f64>,
+    /// Right floor of contact 0, m.
+    pub u_right: Vec<f64>,
+}
+
+/// What a finished case keeps of its run (all deterministic).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CaseOutputs {
+    pub settings: String,
+    /// Peak |story shear|, N, per building, story 1 first.
+    pub story_shear_max: Vec<Vec<f64>>,
+    /// Peak |floor displacement|, m, per building, floor 1 first.
+    pub floor_displacement_max: Vec<Vec<f64>>,
+    /// Impacts (momentum) or contact episodes (gap element).
+    pub impacts: usize,
+    pub impact_times: Vec<f64>,
+    /// Achieved restitution over the impacts with a finite value.
+    pub restitution_mean: Option<f64>,
+    pub restitution_min: Option<f64>,
+    pub restitution_max: Option<f64>,
+    /// Largest penetration (gap element), m.
+    pub max_penetration: Option<f64>,
+    pub persistent_contacts: usize,
+    pub energy_input: f64,
+    pub energy_contact: f64,
+    pub energy_balance_error: f64,
+    pub steps: u64,
+    pub rejected_steps: u64,
+    pub rhs_evaluations: u64,
+    pub events: u64,
+    pub newton_iterations: u64,
+    /// r_N of contact 0, left and right.
+    pub r_n: Option<(f64, f64)>,
+    /// Peak of u_left − u_right at contact 0 over the history (cases with a history).
+    pub peak_closure: Option<f64>,
+    /// Contact-floor histories (cases with `history`, except baselines).
+    pub contact_history: Option<ContactHistory>,
+}
+
+/// The record of one case: parameters, outputs or failure, wall time.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CaseResult {
+    pub spec: CaseSpec,
+    /// "ok" or "failed".
+    pub status: String,
+    /// Failure class (solver error variant, `Scene`, `Panic`).
+    pub error_kind: Option<String>,
+    pub error: Option<String>,
+    pub outputs: Option<CaseOutputs>,
+    /// Wall-clock seconds of the analysis (fastest of `repeat`); not deterministic.
+    pub wall_seconds: f64,
+}
+
+impl CaseResult {
+    pub fn ok(&self) -> Option<&CaseOutputs> {
+        self.outputs.as_ref()
+    }
+}
+
+fn solver_error_kind(e: &SolverError) -> &'static str {
+    match e {
+        SolverError::StepSizeUnderflow { .. } => "StepSizeUnderflow",
+        SolverError::NonFinite { .. } => "NonFinite",
+        SolverError::NewtonFailure { .. } => "NewtonFailure",
+        SolverError::StepBudget { .. } => "StepBudget",
+        SolverError::EventStorm { .. } => "EventStorm",
+        SolverError::Stalled { .. } => "Stalled",
+        SolverError::Model(_) => "Model",
+    }
+}
+
+fn failed(spec: &CaseSpec, kind: &str, msg: String, wall: f64) -> CaseResult {
+    CaseResult {
+        spec: spec.clone(),
+        status: "failed".into(),
+        error_kind: Some(kind.into()),
+        error: Some(msg),
+        outputs: None,
+        wall_seconds: wall,
+    }
+}
+
+/// Runs one case (never panics: a panic inside the solver becomes a failed case).
+pub fn run_case(spec: &CaseSpec, studies_dir: &Path) -> CaseResult {
+    let scene = match spec.load_scene(studies_dir) {
+        Ok(s) => s,
+        Err(e) => return failed(spec, "Scene", e, 0.0),
+    };
+    let mut best = f64::INFINITY;
+    let mut last = None;
+    for _ in 0..spec.repeat.max(1) {
+        let want_hist = spec.history;
+        let t0 = Instant::now();
+        let res = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            let mut hist = want_hist.then(History::default);
+            let r = solvers::run(&scene, spec.method, hist.as_mut());
+            (r, hist)
+        }));
+        let wall = t0.elapsed().as_secs_f64();
+        best = best.min(wall);
+        match res {
+            Err(p) => {
+                let msg = p
+                    .downcast_ref::<&str>()
+                    .map(|s| s.to_string())
+                    .or_else(|| p.downcast_ref::<String>().cloned())
+                    .unwrap_or_else(|| "panic".into());
+                return failed(spec, "Panic", msg, wall);
+            }
+            Ok((Err(e), _)) => {
+                return failed(spec, solver_error_kind(&e), e.to_string(), wall);
+            }
+            Ok((Ok(run), hist)) => last = Some((run, hist)),
+        }
+    }
+    let (run, hist) = last.expect("at least one repetition");
+    let rs: Vec<f64> = run
+        .impacts
+        .iter()
+        .map(|i| i.achieved_restitution)
+        .filter(|r| r.is_finite())
+        .collect();
+    let (rmean, rmin, rmax) = if rs.is_empty() {
+        (None, None, None)
+    } else {
+        (
+            Some(rs.iter().sum::<f64>() / rs.len() as f64),
+            Some(rs.iter().cloned().fold(f64::INFINITY, f64::min)),
+            Some(rs.iter().cloned().fold(f64::NEG_INFINITY, f64::max)),
+        )
+    };
+    let max_pen = run
+        .impacts
+        .iter()
+        .filter_map(|i| i.max_penetration)
+        .fold(None, |a: Option<f64>, p| Some(a.map_or(p, |a| a.max(p))));
+    let (mut peak_closure, mut contact_history) = (None, None);
+    if let (Some(h), Some(c)) = (&hist, scene.contacts.first()) {
+        let off: Vec<usize> = scene
+            .buildings
+            .iter()
+            .scan(0, |acc, b| {
+                let o = *acc;
+                *acc += b.n_floors();
+                Some(o)
+            })
+            .collect();
+        let (il, ir) = (off[c.left] + c.left_dof, off[c.right] + c.right_dof);
+        let ul: Vec<f64> = h.displacement.iter().map(|r| r[il]).collect();
+        let ur: Vec<f64> = h.displacement.iter().map(|r| r[ir]).collect();
+        peak_closure = ul
+            .iter()
+            .zip(&ur)
+            .map(|(a, b)| a - b)
+            .fold(None, |m: Option<f64>, d| Some(m.map_or(d, |m| m.max(d))));
+        if !spec.params.contains_key("baseline") {
+            contact_history = Some(ContactHistory {
+                time: h.time.clone(),
+                u_left: ul,
+                u_right: ur,
+            });
+        }
+    }
+    let outputs = CaseOutputs {
+        settings: run.settings.clone(),
+        story_shear_max: run
+            .buildings
+            .iter()
+            .map(|b| b.story_shear_max.clone())
+            .collect(),
+        floor_displacement_max: run
+            .buildings
+            .iter()
+            .map(|b| b.floor_displacement_max.clone())
+            .collect(),
+        impacts: run.impacts.len(),
+        impact_times: run.impacts.iter().map(|i| i.time).collect(),
+        restitution_mean: rmean,
+        restitution_min: rmin,
+        restitution_max: rmax,
+        max_penetration: max_pen,
+        persistent_contacts: run.persistent_contacts.len(),
+        energy_input: run.energy.input,
+        energy_contact: run.energy.contact,
+        energy_balance_error: run.energy.balance_error,
+        steps: run.stats.steps,
+        rejected_steps: run.stats.rejected_steps,
+        rhs_evaluations: run.stats.rhs_evaluations,
+        events: run.stats.events,
+        newton_iterations: run.stats.newton_iterations,
+        r_n: run.r_n.first().map(|r| (r.r_n_left, r.r_n_right)),
+        peak_closure,
+        contact_history,
+    };
+    CaseResult {
+        spec: spec.clone(),
+        status: "ok".into(),
+        error_kind: None,
+        error: None,
+        outputs: Some(outputs),
+        wall_seconds: best,
+    }
+}
+
+/// A shard `index/count` (1-based index).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Shard {
+    pub index: usize,
+    pub count: usize,
+}
+
+impl std::str::FromStr for Shard {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        let (a, b) = s
+            .split_once('/')
+            .ok_or_else(|| format!("--shard `{s}`: expected i/n, e.g. 2/8"))?;
+        let index: usize = a
+            .trim()
+            .parse()
+            .map_err(|_| format!("--shard `{s}`: `{a}` is not a whole number"))?;
+        let count: usize = b
+            .trim()
+            .parse()
+            .map_err(|_| format!("--shard `{s}`: `{b}` is not a whole number"))?;
+        if count == 0 || index == 0 || index > count {
+            return Err(format!("--shard `{s}`: expected 1 <= i <= n"));
+        }
+        Ok(Shard { index, count })
+    }
+}
+
+impl Shard {
+    /// The shard given by a Slurm job array (SLURM_ARRAY_TASK_ID, SLURM_ARRAY_TASK_COUNT,
+    /// and SLURM_ARRAY_TASK_MIN when present: task ids are mapped to 1 … n).
+    pub fn from_slurm() -> Option<Shard> {
+        let id: i64 = std::env::var("SLURM_ARRAY_TASK_ID").ok()?.parse().ok()?;
+        let count: usize = std::env::var("SLURM_ARRAY_TASK_COUNT").ok()?.parse().ok()?;
+        let min: i64 = std::env::var("SLURM_ARRAY_TASK_MIN")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(1);
+        let index = (id - min + 1) as usize;
+        (count > 0 && index >= 1 && index <= count).then_some(Shard { index, count })
+    }
+
+    pub fn takes(&self, case_index: usize) -> bool {
+        case_index % self.count == self.index - 1
+    }
+}
+
+/// How to run a list of cases.
+#[derive(Debug, Clone)]
+pub struct EngineOptions {
+    /// Folder for this study's outputs (`<out>/<study>`); case files go in `cases/`.
+    pub study_dir: PathBuf,
+    /// Folder that scene and record paths are relative to.
+    pub studies_dir: PathBuf,
+    /// Worker threads (None: rayon's default).
+    pub threads: Option<usize>,
+    pub shard: Option<Shard>,
+    /// Show a progress bar (only drawn when stderr is a terminal).
+    pub progress: bool,
+}
+
+/// What [`run_cases`] did.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct RunSummary {
+    pub total: usize,
+    /// Run now.
+    pub ran: usize,
+    /// Already finished (loaded from case files).
+    pub skipped: usize,
+    /// Left to other shards.
+    pub other_shards: usize,
+    pub failed: usize,
+}
+
+pub fn case_path(study_dir: &Path, id: &str) -> PathBuf {
+    study_dir.join("cases").join(format!("{id}.json"))
+}
+
+/// Reads a finished case, if its file exists and parses.
+pub fn load_case(study_dir: &Path, id: &str) -> Option<CaseResult> {
+    let text = std::fs::read_to_string(case_path(study_dir, id)).ok()?;
+    let r: CaseResult = serde_json::from_str(&text).ok()?;
+    (r.spec.id == id).then_some(r)
+}
+
+/// Removes duplicate ids, keeping the first occurrence (order preserved).
+pub fn dedup(specs: Vec<CaseSpec>) -> Vec<CaseSpec> {
+    let mut seen = std::collections::HashSet::new();
+    specs
+        .into_iter()
+        .filter(|s| seen.insert(s.id.clone()))
+        .collect()
+}
+
+/// Runs the cases that have no case file yet (and belong to the shard), in parallel,
+/// writing each case file as soon as it is done.
+pub fn run_cases(specs: &[CaseSpec], opts: &EngineOptions) -> Result<RunSummary> {
+    let mut summary = RunSummary {
+        total: specs.len(),
+        ..Default::default()
+    };
+    let mut todo = Vec::new();
+    for (i, s) in specs.iter().enumerate() {
+        if let Some(sh) = opts.shard {
+            if !sh.takes(i) {
+                summary.other_shards += 1;
+                continue;
+            }
+        }
+        if load_case(&opts.study_dir, &s.id).is_some() {
+            summary.skipped += 1;
+        } else {
+            todo.push(s);
+        }
+    }
+    let bar = if opts.progress && std::io::stderr().is_terminal() && !todo.is_empty() {
+        let b = indicatif::ProgressBar::new(todo.len() as u64);
+        b.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{prefix} [{bar:40}] {pos}/{len} cases, {elapsed} (eta {eta})",
+            )
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+            .progress_chars("=> "),
+        );
+        b.set_prefix(
+            opts.study_dir
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+        );
+        b
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    let work = || -> Vec<Result<bool>> {
+        todo.par_iter()
+            .map(|s| {
+                let r = run_case(s, &opts.studies_dir);
+                let bad = r.status != "ok";
+                write_json(&case_path(&opts.study_dir, &s.id), &r)?;
+                bar.inc(1);
+                Ok(bad)
+            })
+            .collect()
+    };
+    let results = match opts.threads {
+        Some(n) => rayon::ThreadPoolBuilder::new()
+            .num_threads(n.max(1))
+            .build()
+            .map_err(|e| StudyError::Other(format!("cannot start {n} threads: {e}")))?
+            .install(work),
+        None => work(),
+    };
+    bar.finish_and_clear();
+    for r in results {
+        if r? {
+            summary.failed += 1;
+        }
+        summary.ran += 1;
+    }
+    Ok(summary)
+}
+
+/// The results of `specs` read back from their case files, in case order. Missing cases
+/// are an [`StudyError::Incomplete`] error listing their ids.
+pub fn collect(study: &str, specs: &[CaseSpec], study_dir: &Path) -> Result<Results> {
+    let mut map = BTreeMap::new();
+    let mut missing = Vec::new();
+    for s in specs {
+        match load_case(study_dir, &s.id) {
+            Some(r) => {
+                map.insert(s.id.clone(), r);
+            }
+            None => missing.push(s.id.clone()),
+        }
+    }
+    if !missing.is_empty() {
+        let n = missing.len();
+        return Err(StudyError::Incomplete {
+            study: study.into(),
+            missing: n,
+            total: specs.len(),
+            ids: missing.join(", "),
+        });
+    }
+    Ok(Results {
+        order: specs.iter().map(|s| s.id.clone()).collect(),
+        map,
+    })
+}
+
+/// Finished cases of a study, by id, in case order.
+#[derive(Debug, Clone)]
+pub struct Results {
+    pub order: Vec<String>,
+    pub map: BTreeMap<String, CaseResult>,
+}
+
+impl Results {
+    pub fn get(&self, spec: &CaseSpec) -> &CaseResult {
+        &self.map[&spec.id]
+    }
+    /// Outputs of a case, None if it failed.
+    pub fn out(&self, spec: &CaseSpec) -> Option<&CaseOutputs> {
+        self.map.get(&spec.id).and_then(|r| r.outputs.as_ref())
+    }
+    pub fn iter(&self) -> impl Iterator<Item = &CaseResult> {
+        self.order.iter().map(|id| &self.map[id])
+    }
+}
+
+/// Writes `cases.json` (all results, without histories) and `cases.csv` (one row per case:
+/// parameters, status, scalar outputs, story shears, wall time).
+pub fn write_cases_table(study_dir: &Path, results: &Results) -> Result<()> {
+    let rows: Vec<serde_json::Value> = results
+        .iter()
+        .map(|r| {
+            let mut r = r.clone();
+            if let Some(o) = r.outputs.as_mut() {
+                o.contact_history = None;
+            }
+            serde_json::to_value(&r).unwrap_or(serde_json::Value::Null)
+        })
+        .collect();
+    write_json(&study_dir.join("cases.json"), &rows)?;
+
+    let mut param_keys: Vec<String> = results
+        .iter()
+        .flat_map(|r| r.spec.params.keys().cloned())
+        .collect();
+    param_keys.sort();
+    param_keys.dedup();
+    let shape: Vec<usize> = results
+        .iter()
+        .find_map(|r| {
+            r.ok()
+                .map(|o| o.story_shear_max.iter().map(|v| v.len()).collect())
+        })
+        .unwrap_or_default();
+    let mut w = csv::Writer::from_writer(Vec::new());
+    let mut header: Vec<String> = vec!["id".into(), "method".into(), "record".into()];
+    header.extend(param_keys.iter().cloned());
+    header.extend(
+        [
+            "set",
+            "status",
+            "error_kind",
+            "error",
+            "impacts",
+            "persistent_contacts",
+            "restitution_mean",
+            "restitution_min",
+            "max_penetration_m",
+            "peak_closure_m",
+            "energy_input_J",
+            "energy_contact_J",
+            "energy_balance_error_J",
+            "steps",
+            "rejected_steps",
+            "rhs_evaluations",
+            "events",
+            "newton_iterations",
+        ]
+        .map(String::from),
+    );
+    for (b, n) in shape.iter().enumerate() {
+        for j in 1..=*n {
+            header.push(format!("b{}_V{j}_N", b + 1));
+        }
+    }
+    header.push("wall_seconds".into());
+    let csv_err = |e: csv::Error| StudyError::Other(format!("cases.csv: {e}"));
+    w.write_record(&header).map_err(csv_err)?;
+    let opt = |v: Option<f64>| v.map(|x| format!("{x:e}")).unwrap_or_default();
+    for r in results.iter() {
+        let s = &r.spec;
+        let mut row = vec![
+            s.id.clone(),
+            s.method.to_string(),
+            s.record.clone().unwrap_or_default(),
+        ];
+        for k in &param_keys {
+            row.push(match s.params.get(k) {
+                None => String::new(),
+                Some(serde_json::Value::String(v)) => v.clone(),
+                Some(v) => v.to_string(),
+            });
+        }
+        row.push(s.set.join(";"));
+        row.push(r.status.clone());
+        row.push(r.error_kind.clone().unwrap_or_default());
+        row.push(r.error.clone().unwrap_or_default());
+        match r.ok() {
+            Some(o) => {
+                row.extend([
+                    o.impacts.to_string(),
+                    o.persistent_contacts.to_string(),
+                    opt(o.restitution_mean),
+                    opt(o.restitution_min),
+                    opt(o.max_penetration),
+                    opt(o.peak_closure),
+                    format!("{:e}", o.energy_input),
+                    format!("{:e}", o.energy_contact),
+                    format!("{:e}", o.energy_balance_error),
+                    o.steps.to_string(),
+                    o.rejected_steps.to_string(),
+                    o.rhs_evaluations.to_string(),
+                    o.events.to_string(),
+                    o.newton_iterations.to_string(),
+                ]);
+                for (b, n) in shape.iter().enumerate() {
+                    for j in 0..*n {
+                        row.push(
+                            o.story_shear_max
+                                .get(b)
+                                .and_then(|v| v.get(j))
+                                .map(|x| format!("{x:e}"))
+                                .unwrap_or_default(),
+                        );
+                    }
+                }
+            }
+            None => row.extend(std::iter::repeat_n(
+                String::new(),
+                14 + shape.iter().sum::<usize>(),
+            )),
+        }
+        row.push(format!("{:.6e}", r.wall_seconds));
+        w.write_record(&row).map_err(csv_err)?;
+    }
+    let bytes = w
+        .into_inner()
+        .map_err(|e| StudyError::Other(format!("cases.csv: {e}")))?;
+    write_atomic(&study_dir.join("cases.csv"), &bytes)?;
+    Ok(())
+}

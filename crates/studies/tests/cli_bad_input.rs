@@ -1,0 +1,1026 @@
+//! The bad-input catalogue: malformed records, scenes and `--set` expressions run through the
+//! real `pound` binary. Every case must
+//!
+//! - exit with code 2 (bad input),
+//! - print an error on stderr that names the file (or the `--set` expression), the line or
+//!   key, and what was expected,
+//! - not panic,
+//! - leave no output behind: the `--out` / `--history` files passed are never created, and
+//!   nothing is printed on stdout.
+//!
+//! The loader-level tests (and the no-panic property test) are in
+//! `crates/structure/tests/scene.rs`.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+const POUND: &str = env!("CARGO_BIN_EXE_pound");
+
+/// A fresh folder under the system temporary directory, removed on drop.
+struct TempDir(PathBuf);
+
+impl TempDir {
+    fn new(tag: &str) -> Self {
+        static N: AtomicUsize = AtomicUsize::new(0);
+        let p = std::env::temp_dir().join(format!(
+            "pound-bad-input-{}-{}-{tag}",
+            std::process::id(),
+            N.fetch_add(1, Ordering::Relaxed)
+        ));
+        let _ = std::fs::remove_dir_all(&p);
+        std::fs::create_dir_all(&p).unwrap();
+        TempDir(p)
+    }
+
+    fn write(&self, name: &str, content: &str) -> PathBuf {
+        let p = self.0.join(name);
+        std::fs::write(&p, content).unwrap();
+        p
+    }
+
+    fn path(&self, name: &str) -> PathBuf {
+        self.0.join(name)
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+fn pound(args: &[String]) -> Output {
+    Command::new(POUND).args(args).output().unwrap()
+}
+
+fn s(p: &Path) -> String {
+    p.display().to_string()
+}
+
+/// Runs `args` and checks the bad-input contract; `expect` are fragments of the message
+/// (file, line or key, what was expected). `outputs` must not exist afterwards.
+#[track_caller]
+fn assert_bad(args: &[String], expect: &[&str], outputs: &[&Path]) -> String {
+    let out = pound(args);
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    let what = format!(
+        "pound {}\nstderr: {stderr}\nstdout: {stdout}",
+        args.join(" ")
+    );
+    assert_eq!(out.status.code(), Some(2), "exit code, {what}");
+    assert!(!stderr.contains("panicked"), "panic, {what}");
+    assert!(stderr.starts_with("error"), "an error message, {what}");
+    for e in expect {
+        assert!(stderr.contains(e), "stderr should contain {e:?}, {what}");
+    }
+    assert!(stdout.is_empty(), "nothing on stdout, {what}");
+    for p in outputs {
+        assert!(!p.exists(), "{} must not be written, {what}", p.display());
+    }
+    stderr
+}
+
+// ---------------------------------------------------------------------------------------
+// Records
+// ---------------------------------------------------------------------------------------
+
+const AT2_HEAD: &str =
+    "PEER NGA STRONG MOTION DATABASE RECORD\nSynthetic, bad-input test\nACCELERATION TIME SERIES IN UNITS OF G\n";
+
+fn at2(line4: &str, body: &str) -> String {
+    format!("{AT2_HEAD}{line4}\n{body}")
+}
+
+const VALUES5: &str = "  0.01  0.02 -0.03  0.04  0.00\n";
+
+/// A record case: the file, extra `pound record` arguments, and the expected fragments.
+/// Checked through `pound record`, `pound spectrum --out` and a scene's `[ground_motion]`.
+#[track_caller]
+fn record_case(name: &str, content: &str, cli: &[&str], scene_gm: &str, expect: &[&str]) {
+    let d = TempDir::new("record");
+    let rec = d.write(name, content);
+    let mut args = vec!["record".to_string(), s(&rec)];
+    args.extend(cli.iter().map(|a| a.to_string()));
+    let mut parts = vec![name];
+    parts.extend_from_slice(expect);
+    assert_bad(&args, &parts, &[]);
+
+    let csv = d.path("spectrum.csv");
+    let mut args = vec!["spectrum".to_string(), s(&rec), "--out".into(), s(&csv)];
+    args.extend(cli.iter().map(|a| a.to_string()));
+    assert_bad(&args, &parts, &[&csv]);
+
+    let scene = d.write(
+        "scene.toml",
+        &format!("{BUILDINGS}\n[ground_motion]\nfile = \"{name}\"\n{scene_gm}\n"),
+    );
+    let (json, hist) = (d.path("out.json"), d.path("history.csv"));
+    let args = run_args(&scene, &json, &hist, &[]);
+    let mut parts = vec!["scene.toml", "ground_motion.file", name];
+    parts.extend_from_slice(expect);
+    assert_bad(&args, &parts, &[&json, &hist]);
+}
+
+#[test]
+fn record_valid_baseline() {
+    // The same helpers accept a good record, so the failures below are about the defect.
+    let d = TempDir::new("good-record");
+    let rec = d.write("good.AT2", &at2("NPTS=    5, DT=   0.0100 SEC", VALUES5));
+    let out = pound(&["record".into(), s(&rec)]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let scene = d.write(
+        "scene.toml",
+        &format!("{BUILDINGS}\n[ground_motion]\nfile = \"good.AT2\"\n"),
+    );
+    let out = pound(&["modes".into(), s(&scene)]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+#[test]
+fn record_missing_header() {
+    let body = "0.01 0.02\n0.03 0.04\n0.05 0.06\n0.07 0.08\n0.09 0.10\n";
+    record_case("noheader.AT2", body, &[], "", &["line 4", "NPTS"]);
+}
+
+#[test]
+fn record_bad_header() {
+    let text = at2("NPTS is seven, DT is small", VALUES5);
+    record_case("badheader.AT2", &text, &[], "", &["line 4", "NPTS", "DT"]);
+    let text = at2("NPTS=  5 0.0100 SEC", VALUES5);
+    record_case("badheader2.AT2", &text, &[], "", &["line 4", "expected"]);
+}
+
+#[test]
+fn record_truncated_header() {
+    record_case(
+        "short.AT2",
+        "PEER NGA STRONG MOTION DATABASE RECORD\n",
+        &[],
+        "",
+        &["line 2", "header"],
+    );
+}
+
+#[test]
+fn record_npts_larger_than_values() {
+    let text = at2("NPTS=    7, DT=   0.0100 SEC", VALUES5);
+    record_case(
+        "npts_large.AT2",
+        &text,
+        &[],
+        "",
+        &["line 4", "NPTS = 7", "5"],
+    );
+}
+
+#[test]
+fn record_npts_smaller_than_values() {
+    let text = at2("NPTS=    3, DT=   0.0100 SEC", VALUES5);
+    record_case(
+        "npts_small.AT2",
+        &text,
+        &[],
+        "",
+        &["line 4", "NPTS = 3", "5"],
+    );
+}
+
+#[test]
+fn record_non_numeric_value() {
+    let text = at2(
+        "NPTS=    5, DT=   0.0100 SEC",
+        "  0.01  0.02\n  0.03  abc  0.00\n",
+    );
+    record_case(
+        "word.AT2",
+        &text,
+        &[],
+        "",
+        &["line 6", "column", "abc", "number"],
+    );
+    let two = "0.00 0.1\n0.01 0.2\n0.02 x\n";
+    record_case("word.txt", two, &[], "", &["line 3", "x", "number"]);
+    let one = "0.1\n0.2\n0.3 0.4 zz\n";
+    record_case(
+        "word.dat",
+        one,
+        &["--format", "one-column", "--dt", "0.01"],
+        "format = \"one-column\"\ndt = 0.01",
+        &["line 3", "zz", "number"],
+    );
+}
+
+#[test]
+fn record_empty_file() {
+    record_case("empty.AT2", "", &[], "", &["empty"]);
+    record_case("empty.txt", "", &[], "", &["empty"]);
+    record_case("blank.txt", "\n  \n\n", &[], "", &["empty"]);
+    record_case(
+        "empty.dat",
+        "",
+        &["--format", "one-column", "--dt", "0.01"],
+        "format = \"one-column\"\ndt = 0.01",
+        &["empty"],
+    );
+}
+
+#[test]
+fn record_nan_and_infinite_values() {
+    for (i, bad) in [
+        "NaN",
+        "nan",
+        "inf",
+        "-inf",
+        "Infinity",
+        "1e999",
+        "-1.0E+400",
+    ]
+    .iter()
+    .enumerate()
+    {
+        let text = at2(
+            "NPTS=    5, DT=   0.0100 SEC",
+            &format!("  0.01  0.02 {bad}  0.04  0.00\n"),
+        );
+        record_case(
+            &format!("nonfinite{i}.AT2"),
+            &text,
+            &[],
+            "",
+            &["line 5", bad],
+        );
+        let two = format!("0.00 0.1\n0.01 {bad}\n0.02 0.0\n");
+        record_case(
+            &format!("nonfinite{i}.txt"),
+            &two,
+            &[],
+            "",
+            &["line 2", bad],
+        );
+    }
+}
+
+#[test]
+fn record_zero_and_negative_dt() {
+    let zero = at2("NPTS=    5, DT=   0.0000 SEC", VALUES5);
+    record_case("dt0.AT2", &zero, &[], "", &["line 4", "DT > 0", "found 0"]);
+    let neg = at2("NPTS=    5, DT=  -0.0100 SEC", VALUES5);
+    record_case("dtneg.AT2", &neg, &[], "", &["line 4", "DT > 0", "-0.01"]);
+    // Two-column: a repeated or decreasing time.
+    record_case("t0.txt", "0 1\n0 2\n0 3\n", &[], "", &["line 2", "> 0"]);
+    record_case(
+        "tneg.txt",
+        "0 1\n-0.01 2\n-0.02 3\n",
+        &[],
+        "",
+        &["line 2", "> 0"],
+    );
+}
+
+#[test]
+fn record_one_column_dt_on_the_command_line() {
+    let d = TempDir::new("one-column-dt");
+    let rec = d.write("one.dat", "0.1\n0.2\n0.3\n");
+    let csv = d.path("spectrum.csv");
+    for (dt, expect) in [
+        ("--dt=0", &["--dt", "0", "> 0"][..]),
+        ("--dt=-0.01", &["--dt", "-0.01", "> 0"][..]),
+        ("--dt=nan", &["--dt", "NaN", "> 0"][..]),
+    ] {
+        let base = ["--format".to_string(), "one-column".into(), dt.into()];
+        let mut args = vec!["record".to_string(), s(&rec)];
+        args.extend(base.iter().cloned());
+        assert_bad(&args, expect, &[]);
+        let mut args = vec!["spectrum".to_string(), s(&rec), "--out".into(), s(&csv)];
+        args.extend(base.iter().cloned());
+        assert_bad(&args, expect, &[&csv]);
+    }
+    let args = vec![
+        "record".to_string(),
+        s(&rec),
+        "--format".into(),
+        "one-column".into(),
+    ];
+    assert_bad(&args, &["one-column", "--dt"], &[]);
+    let args = vec![
+        "record".to_string(),
+        s(&rec),
+        "--units".into(),
+        "furlongs".into(),
+    ];
+    assert_bad(&args, &["--units", "furlongs"], &[]);
+}
+
+#[test]
+fn record_one_column_dt_in_a_scene() {
+    let d = TempDir::new("scene-dt");
+    d.write("one.dat", "0.1\n0.2\n0.3\n");
+    let (json, hist) = (d.path("out.json"), d.path("history.csv"));
+    for (gm, expect) in [
+        ("dt = 0.0", &["ground_motion.dt", "> 0"][..]),
+        ("dt = -0.01", &["ground_motion.dt", "-0.01", "> 0"][..]),
+        ("dt = nan", &["ground_motion.dt", "> 0"][..]),
+        ("", &["ground_motion.dt", "missing"][..]),
+    ] {
+        let scene = d.write(
+            "scene.toml",
+            &format!(
+                "{BUILDINGS}\n[ground_motion]\nfile = \"one.dat\"\nformat = \"one-column\"\n{gm}\n"
+            ),
+        );
+        let mut parts = vec!["scene.toml"];
+        parts.extend_from_slice(expect);
+        assert_bad(
+            &run_args(&scene, &json, &hist, &[]),
+            &parts,
+            &[&json, &hist],
+        );
+    }
+}
+
+#[test]
+fn record_file_that_does_not_exist() {
+    let d = TempDir::new("no-record");
+    let missing = d.path("missing.AT2");
+    assert_bad(
+        &["record".into(), s(&missing)],
+        &["missing.AT2", "cannot read"],
+        &[],
+    );
+    let csv = d.path("spectrum.csv");
+    assert_bad(
+        &["spectrum".into(), s(&missing), "--out".into(), s(&csv)],
+        &["missing.AT2"],
+        &[&csv],
+    );
+}
+
+#[test]
+fn record_two_column_shape_errors() {
+    // Three values on a line, and non-uniform times.
+    let d = TempDir::new("two-column");
+    let a = d.write("three.txt", "0.00 0.1\n0.01 0.2 0.3\n");
+    assert_bad(
+        &["record".into(), s(&a)],
+        &["three.txt", "line 2", "2 values"],
+        &[],
+    );
+    let b = d.write("uneven.txt", "0.00 0.1\n0.01 0.2\n0.05 0.3\n0.06 0.0\n");
+    assert_bad(
+        &["record".into(), s(&b)],
+        &["uneven.txt", "line", "uniformly spaced"],
+        &[],
+    );
+}
+
+// ---------------------------------------------------------------------------------------
+// Scenes
+// ---------------------------------------------------------------------------------------
+
+/// Two valid buildings, no ground motion section and no analysis section.
+const BUILDINGS: &str = r#"name = "bad-input"
+
+[[buildings]]
+name = "a"
+masses = [1.0e5, 1.0e5]
+story_stiffness = [1.0e8, 1.0e8]
+damping_ratio = 0.05
+
+[[buildings]]
+name = "b"
+masses = [1.2e5, 1.2e5]
+story_stiffness = [1.5e8, 1.5e8]
+"#;
+
+const CONTACT: &str = r#"
+[[contacts]]
+left = "a"
+left_floor = 2
+right = "b"
+right_floor = 2
+gap = 0.01
+restitution = 0.8
+"#;
+
+const GROUND: &str = r#"
+[ground_motion]
+file = "rec.txt"
+pga = 0.3
+"#;
+
+const SOLVERS: &str = r#"
+[analysis]
+duration = 0.5
+
+[momentum]
+modes = 2
+
+[gap_element]
+stiffness = 1.0e9
+law = "linear"
+integrator = "newmark"
+time_step = 0.001
+tolerance = 1.0e-6
+"#;
+
+const RECORD: &str = "0.00 0.0\n0.01 0.1\n0.02 -0.2\n0.03 0.05\n0.04 0.0\n";
+
+fn base_scene() -> String {
+    format!("{BUILDINGS}{CONTACT}{GROUND}{SOLVERS}")
+}
+
+fn run_args(scene: &Path, json: &Path, hist: &Path, sets: &[&str]) -> Vec<String> {
+    let mut a = vec![
+        "run".to_string(),
+        s(scene),
+        "--method".into(),
+        "gap".into(),
+        "--out".into(),
+        s(json),
+        "--history".into(),
+        s(hist),
+    ];
+    for x in sets {
+        a.push("--set".into());
+        a.push(x.to_string());
+    }
+    a
+}
+
+/// `text` with `from` replaced by `to` (which must occur exactly once).
+#[track_caller]
+fn edit(text: &str, from: &str, to: &str) -> String {
+    assert_eq!(text.matches(from).count(), 1, "{from:?} in the base scene");
+    text.replacen(from, to, 1)
+}
+
+/// Writes `text` as `scene.toml` next to a valid record and checks the contract through
+/// `pound run` (with `--out` and `--history`), `pound modes` and `pound export opensees`.
+#[track_caller]
+fn scene_case(text: &str, sets: &[&str], expect: &[&str]) {
+    let d = TempDir::new("scene");
+    d.write("rec.txt", RECORD);
+    let scene = d.write("scene.toml", text);
+    let (json, hist) = (d.path("out.json"), d.path("history.csv"));
+    let mut parts = Vec::new();
+    if !expect.iter().any(|e| e.starts_with("--set")) {
+        parts.push("scene.toml");
+    }
+    parts.extend_from_slice(expect);
+    assert_bad(
+        &run_args(&scene, &json, &hist, sets),
+        &parts,
+        &[&json, &hist],
+    );
+
+    let mut modes = vec!["modes".to_string(), s(&scene), "--json".into()];
+    let mut export = vec!["export".to_string(), "opensees".into(), s(&scene)];
+    for x in sets {
+        for v in [&mut modes, &mut export] {
+            v.push("--set".into());
+            v.push(x.to_string());
+        }
+    }
+    assert_bad(&modes, &parts, &[]);
+    assert_bad(&export, &parts, &[]);
+}
+
+#[test]
+fn scene_valid_baseline() {
+    // The base scene of the catalogue is valid: each case below breaks one thing.
+    let d = TempDir::new("good-scene");
+    d.write("rec.txt", RECORD);
+    let scene = d.write("scene.toml", &base_scene());
+    let out = pound(&["modes".into(), s(&scene)]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for set in [
+        "contacts.0.gap=0",
+        "contacts.0.restitution=0",
+        "contacts.0.restitution=1",
+        "gap_element.tolerance=0.09",
+    ] {
+        let out = pound(&["modes".into(), s(&scene), "--set".into(), set.into()]);
+        assert!(
+            out.status.success(),
+            "--set {set}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+}
+
+#[test]
+fn scene_toml_syntax_error() {
+    let text = edit(&base_scene(), "name = \"a\"", "name = \"a");
+    scene_case(&text, &[], &["line 4", "TOML parse error"]);
+    let text = edit(&base_scene(), "gap = 0.01", "gap = ");
+    scene_case(&text, &[], &["line ", "TOML parse error"]);
+}
+
+#[test]
+fn scene_unknown_keys() {
+    let base = base_scene();
+    let cases = [
+        (
+            edit(&base, "name = \"bad-input\"", "nmae = \"bad-input\""),
+            "nmae",
+            "line 1",
+        ),
+        (
+            edit(&base, "damping_ratio = 0.05", "damping = 0.05"),
+            "damping",
+            "line 7",
+        ),
+        (edit(&base, "gap = 0.01", "gapp = 0.01"), "gapp", "line 19"),
+        (edit(&base, "pga = 0.3", "pgaa = 0.3"), "pgaa", "line 24"),
+        (
+            edit(&base, "duration = 0.5", "durration = 0.5"),
+            "durration",
+            "line 27",
+        ),
+        (edit(&base, "modes = 2", "mode = 2"), "mode", "line 30"),
+        (
+            edit(&base, "time_step = 0.001", "timestep = 0.001"),
+            "timestep",
+            "line 36",
+        ),
+        (format!("{base}\n[solver]\nx = 1\n"), "solver", "line 39"),
+    ];
+    for (text, key, line) in &cases {
+        scene_case(text, &[], &[&format!("`{key}`"), line, "expected one of"]);
+    }
+    // Through --set: the key is named with the table it landed in.
+    scene_case(
+        &base,
+        &["gap_element.stifness=1e9"],
+        &["`stifness`", "gap_element"],
+    );
+    scene_case(&base, &["buildings.0.mas=1"], &["`mas`", "buildings"]);
+}
+
+#[test]
+fn scene_missing_fields() {
+    let base = base_scene();
+    let cases: Vec<(String, &[&str])> = vec![
+        (
+            edit(&base, "masses = [1.0e5, 1.0e5]\n", ""),
+            &["buildings[0].masses", "missing"],
+        ),
+        (
+            edit(&base, "story_stiffness = [1.5e8, 1.5e8]\n", ""),
+            &["buildings[1].story_stiffness", "missing"],
+        ),
+        (edit(&base, "name = \"a\"\n", ""), &["missing field `name`"]),
+        (edit(&base, "gap = 0.01\n", ""), &["missing field `gap`"]),
+        (edit(&base, "left = \"a\"\n", ""), &["missing field `left`"]),
+        (
+            edit(&base, "right_floor = 2\n", ""),
+            &["missing field `right_floor`"],
+        ),
+        (
+            edit(&base, "file = \"rec.txt\"\n", ""),
+            &["missing field `file`"],
+        ),
+        (
+            format!("{BUILDINGS}{CONTACT}"),
+            &["analysis.duration", "missing"],
+        ),
+        (
+            "name = \"nothing\"\n".to_string(),
+            &["missing field `buildings`"],
+        ),
+    ];
+    for (text, expect) in &cases {
+        scene_case(text, &[], expect);
+    }
+}
+
+#[test]
+fn scene_non_positive_or_non_finite_masses_and_stiffnesses() {
+    let base = base_scene();
+    for (value, shown) in [
+        ("0.0", "0"),
+        ("-1.0e5", "-100000"),
+        ("nan", "NaN"),
+        ("inf", "inf"),
+    ] {
+        let text = edit(
+            &base,
+            "masses = [1.2e5, 1.2e5]",
+            &format!("masses = [1.2e5, {value}]"),
+        );
+        scene_case(
+            &text,
+            &[],
+            &["buildings[1].masses[1]", shown, "finite mass > 0"],
+        );
+        let text = edit(
+            &base,
+            "story_stiffness = [1.0e8, 1.0e8]",
+            &format!("story_stiffness = [{value}, 1.0e8]"),
+        );
+        scene_case(
+            &text,
+            &[],
+            &["buildings[0].story_stiffness[0]", shown, "> 0"],
+        );
+    }
+    // The shorthands too.
+    let short = edit(
+        &base,
+        "masses = [1.0e5, 1.0e5]\nstory_stiffness = [1.0e8, 1.0e8]",
+        "stories = 2\nmass = -1.0\nstory_stiffness = 1.0e8",
+    );
+    scene_case(&short, &[], &["buildings[0].masses[0]", "> 0"]);
+    let short = edit(
+        &base,
+        "masses = [1.0e5, 1.0e5]\nstory_stiffness = [1.0e8, 1.0e8]",
+        "stories = 2\nmass = 1.0e5\nstory_stiffness = 0.0",
+    );
+    scene_case(&short, &[], &["buildings[0].story_stiffness[0]", "> 0"]);
+    let short = edit(
+        &base,
+        "masses = [1.0e5, 1.0e5]\nstory_stiffness = [1.0e8, 1.0e8]",
+        "stories = 0\nmass = 1.0e5\nstory_stiffness = 1.0e8",
+    );
+    scene_case(&short, &[], &["buildings[0].stories", "1 ..="]);
+    // Through --set, and the damping ratio.
+    scene_case(
+        &base,
+        &["buildings.0.masses.0=0"],
+        &["buildings[0].masses[0]", "> 0"],
+    );
+    scene_case(
+        &base,
+        &["buildings.0.damping_ratio=1.0"],
+        &["buildings[0]", "damping_ratio", "< 1"],
+    );
+    scene_case(
+        &base,
+        &["buildings.0.damping_ratio=-0.1"],
+        &["buildings[0]", "damping_ratio"],
+    );
+}
+
+#[test]
+fn scene_array_lengths_that_disagree() {
+    let base = base_scene();
+    let text = edit(
+        &base,
+        "story_stiffness = [1.0e8, 1.0e8]",
+        "story_stiffness = [1.0e8]",
+    );
+    scene_case(
+        &text,
+        &[],
+        &["buildings[0].story_stiffness", "1 values", "expected 2"],
+    );
+    let text = edit(
+        &base,
+        "story_stiffness = [1.5e8, 1.5e8]",
+        "story_stiffness = [1.5e8, 1.5e8, 1.5e8]",
+    );
+    scene_case(
+        &text,
+        &[],
+        &["buildings[1].story_stiffness", "3 values", "expected 2"],
+    );
+    scene_case(
+        &base,
+        &["buildings.0.initial_displacement=[0.0]"],
+        &["buildings[0]", "initial_displacement", "expected 2"],
+    );
+    scene_case(
+        &base,
+        &["buildings.1.initial_velocity=[0.0, 0.0, 0.0]"],
+        &["buildings[1]", "initial_velocity", "expected 2"],
+    );
+    scene_case(
+        &base,
+        &["buildings.0.masses=[]"],
+        &["buildings[0].masses", "empty"],
+    );
+}
+
+#[test]
+fn scene_floors_out_of_range() {
+    let base = base_scene();
+    for (set, key) in [
+        ("contacts.0.left_floor=3", "contacts[0].left_floor"),
+        ("contacts.0.left_floor=0", "contacts[0].left_floor"),
+        ("contacts.0.right_floor=-1", "contacts[0].right_floor"),
+        ("contacts.0.right_floor=99", "contacts[0].right_floor"),
+    ] {
+        scene_case(&base, &[set], &[key, "out of range", "floors 1 … 2"]);
+    }
+}
+
+#[test]
+fn scene_contact_buildings() {
+    let base = base_scene();
+    scene_case(
+        &edit(&base, "left = \"a\"", "left = \"c\""),
+        &[],
+        &["contacts[0].left", "no building named `c`", "a, b"],
+    );
+    scene_case(
+        &base,
+        &["contacts.0.right=nobody"],
+        &["contacts[0].right", "`nobody`"],
+    );
+    scene_case(
+        &edit(&base, "right = \"b\"", "right = \"a\""),
+        &[],
+        &["contacts[0].right", "two different buildings", "`a`"],
+    );
+    scene_case(
+        &edit(&base, "name = \"b\"", "name = \"a\""),
+        &[],
+        &["buildings[1].name", "twice"],
+    );
+}
+
+#[test]
+fn scene_gap_and_restitution() {
+    let base = base_scene();
+    scene_case(
+        &edit(&base, "gap = 0.01", "gap = -0.01"),
+        &[],
+        &["contacts[0].gap", "-0.01", ">= 0"],
+    );
+    scene_case(&base, &["contacts.0.gap=nan"], &["contacts[0].gap", ">= 0"]);
+    scene_case(
+        &base,
+        &["contacts.0.gap=inf"],
+        &["contacts[0].gap", "finite"],
+    );
+    for cr in ["1.5", "-0.2", "nan"] {
+        scene_case(
+            &base,
+            &[&format!("contacts.0.restitution={cr}")],
+            &["contacts[0].restitution", "[0, 1]"],
+        );
+    }
+}
+
+#[test]
+fn scene_ground_motion_scaling() {
+    let base = base_scene();
+    scene_case(
+        &edit(&base, "pga = 0.3", "pga = 0.3\nscale = 2.0"),
+        &[],
+        &["ground_motion.pga", "`pga` or `scale`, not both"],
+    );
+    for pga in ["0", "-0.3", "nan", "inf"] {
+        scene_case(
+            &edit(&base, "pga = 0.3", &format!("pga = {pga}")),
+            &[],
+            &["ground_motion.pga", "> 0"],
+        );
+    }
+    scene_case(
+        &edit(&base, "pga = 0.3", "scale = inf"),
+        &[],
+        &["ground_motion.scale", "finite"],
+    );
+    scene_case(
+        &edit(&base, "pga = 0.3", "units = \"furlongs\""),
+        &[],
+        &["ground_motion.units", "furlongs"],
+    );
+    scene_case(
+        &edit(&base, "pga = 0.3", "format = \"csv\""),
+        &[],
+        &["ground_motion.format", "`csv`"],
+    );
+}
+
+#[test]
+fn scene_record_file_that_does_not_exist() {
+    let base = base_scene();
+    scene_case(
+        &edit(&base, "file = \"rec.txt\"", "file = \"no-such-record.AT2\""),
+        &[],
+        &["ground_motion.file", "no-such-record.AT2", "does not exist"],
+    );
+    scene_case(
+        &base,
+        &["ground_motion.file=elsewhere/rec.txt"],
+        &["ground_motion.file", "elsewhere/rec.txt", "does not exist"],
+    );
+}
+
+#[test]
+fn scene_duration() {
+    let base = base_scene();
+    for d in ["0.0", "-1.0", "nan", "inf"] {
+        scene_case(
+            &edit(&base, "duration = 0.5", &format!("duration = {d}")),
+            &[],
+            &["analysis.duration", "> 0"],
+        );
+    }
+    scene_case(
+        &base,
+        &["analysis.max_steps=0"],
+        &["analysis.max_steps", ">= 1"],
+    );
+    scene_case(
+        &base,
+        &["analysis.max_impact_rate=0"],
+        &["analysis.max_impact_rate", "> 0"],
+    );
+}
+
+#[test]
+fn scene_solver_options_out_of_range() {
+    let base = base_scene();
+    let cases: &[(&str, &str, &[&str])] = &[
+        ("modes = 2", "modes = 0", &["momentum.modes", ">= 1"]),
+        ("modes = 2", "modes = -3", &["momentum.modes", ">= 1"]),
+        (
+            "stiffness = 1.0e9",
+            "stiffness = 0.0",
+            &["gap_element.stiffness", "> 0"],
+        ),
+        (
+            "stiffness = 1.0e9",
+            "stiffness = -1.0e9",
+            &["gap_element.stiffness", "> 0"],
+        ),
+        (
+            "stiffness = 1.0e9",
+            "stiffness = nan",
+            &["gap_element.stiffness", "> 0"],
+        ),
+        (
+            "tolerance = 1.0e-6",
+            "tolerance = 0.1",
+            &["gap_element.tolerance", "(0, 0.1)"],
+        ),
+        (
+            "tolerance = 1.0e-6",
+            "tolerance = 0.5",
+            &["gap_element.tolerance", "(0, 0.1)"],
+        ),
+        (
+            "tolerance = 1.0e-6",
+            "tolerance = 0.0",
+            &["gap_element.tolerance", "(0, 0.1)"],
+        ),
+        (
+            "time_step = 0.001",
+            "time_step = 0.0",
+            &["gap_element.time_step", "> 0"],
+        ),
+        (
+            "time_step = 0.001",
+            "time_step = -0.001",
+            &["gap_element.time_step", "> 0"],
+        ),
+        (
+            "time_step = 0.001",
+            "time_step = 10.0",
+            &["gap_element.time_step", "duration"],
+        ),
+        (
+            "law = \"linear\"",
+            "law = \"hertz\"",
+            &[
+                "`hertz`",
+                "line 34",
+                "law = ",
+                "expected one of",
+                "kelvin-voigt",
+            ],
+        ),
+        (
+            "integrator = \"newmark\"",
+            "integrator = \"rk4\"",
+            &[
+                "`rk4`",
+                "line 35",
+                "integrator = ",
+                "expected `adaptive` or `newmark`",
+            ],
+        ),
+        (
+            "modes = 2",
+            "modes = 2\nimpulse = \"elastic\"",
+            &[
+                "`elastic`",
+                "line 31",
+                "impulse = ",
+                "expected `consistent` or `paper`",
+            ],
+        ),
+        (
+            "modes = 2",
+            "modes = 2\ncapture_velocity = -1.0",
+            &["momentum.capture_velocity", ">= 0"],
+        ),
+    ];
+    for (from, to, expect) in cases {
+        scene_case(&edit(&base, from, to), &[], expect);
+    }
+    // The same through --set.
+    scene_case(&base, &["momentum.modes=0"], &["momentum.modes", ">= 1"]);
+    scene_case(
+        &base,
+        &["gap_element.stiffness=-5"],
+        &["gap_element.stiffness", "> 0"],
+    );
+    scene_case(
+        &base,
+        &["gap_element.tolerance=0.1"],
+        &["gap_element.tolerance"],
+    );
+    scene_case(
+        &base,
+        &["gap_element.time_step=0"],
+        &["gap_element.time_step"],
+    );
+    // A wrong type names the key too.
+    scene_case(&base, &["momentum.modes=ten"], &["momentum.modes"]);
+}
+
+#[test]
+fn scene_bad_set_expressions() {
+    let base = base_scene();
+    let cases: &[(&str, &[&str])] = &[
+        (
+            "contacts.5.gap=0.05",
+            &[
+                "--set contacts.5.gap=0.05",
+                "index 5 is out of range",
+                "1 entries",
+            ],
+        ),
+        (
+            "buildings.2.masses.0=1",
+            &["--set buildings.2.masses.0=1", "out of range", "2 entries"],
+        ),
+        (
+            "buildings.0.masses.7=1",
+            &["--set buildings.0.masses.7=1", "out of range"],
+        ),
+        ("contacts.0.gap", &["--set contacts.0.gap", "PATH=VALUE"]),
+        (
+            "contacts.first.gap=1",
+            &["--set contacts.first.gap=1", "numeric index"],
+        ),
+        ("=0.05", &["--set =0.05", "empty"]),
+        (
+            "contacts.0.gap.x=1",
+            &["--set contacts.0.gap.x=1", "not a table or array"],
+        ),
+    ];
+    for (set, expect) in cases {
+        scene_case(&base, &[set], expect);
+    }
+}
+
+#[test]
+fn scene_file_that_does_not_exist() {
+    let d = TempDir::new("no-scene");
+    let scene = d.path("absent.toml");
+    let (json, hist) = (d.path("out.json"), d.path("history.csv"));
+    assert_bad(
+        &run_args(&scene, &json, &hist, &[]),
+        &["absent.toml", "cannot read"],
+        &[&json, &hist],
+    );
+}
+
+#[test]
+fn usage_errors_exit_2() {
+    // clap's own errors follow the same exit code.
+    let d = TempDir::new("usage");
+    d.write("rec.txt", RECORD);
+    let scene = d.write("scene.toml", &base_scene());
+    let json = d.path("out.json");
+    let out = pound(&[
+        "run".into(),
+        s(&scene),
+        "--method".into(),
+        "teleport".into(),
+        "--out".into(),
+        s(&json),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("teleport"));
+    assert!(!json.exists());
+}

@@ -1,0 +1,149 @@
+//! Sweep engine: thread-count independence, shard + merge = single run, resume, failed cases.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use studies::studies::{merge, run_study, RunConfig, StudyOptions};
+use studies::sweep::{run_cases, CaseSpec, EngineOptions, Shard};
+
+fn studies_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../studies")
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("pound-sweep-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+fn cfg(out: &Path, threads: usize, shard: Option<Shard>) -> RunConfig {
+    RunConfig {
+        out: out.to_path_buf(),
+        studies_dir: studies_dir(),
+        threads: Some(threads),
+        shard,
+        opts: StudyOptions {
+            quick: true,
+            records: vec![],
+        },
+        progress: false,
+    }
+}
+
+/// Every deterministic output file of a study (not the case files, not wall times).
+fn outputs(dir: &Path) -> BTreeMap<String, Vec<u8>> {
+    let mut m = BTreeMap::new();
+    for e in std::fs::read_dir(dir).unwrap() {
+        let p = e.unwrap().path();
+        let name = p.file_name().unwrap().to_string_lossy().into_owned();
+        if p.is_dir() || name.starts_with("cases") || name.contains("cpu") || name.starts_with('.')
+        {
+            continue;
+        }
+        m.insert(name, std::fs::read(&p).unwrap());
+    }
+    m
+}
+
+#[test]
+fn thread_count_does_not_change_outputs() {
+    let (a, b) = (tmp("t1"), tmp("t2"));
+    run_study("stiffness", &cfg(&a, 1, None)).unwrap();
+    run_study("stiffness", &cfg(&b, 2, None)).unwrap();
+    let (oa, ob) = (outputs(&a.join("stiffness")), outputs(&b.join("stiffness")));
+    assert!(oa.contains_key("stiffness.png") && oa.contains_key("summary.md"));
+    assert_eq!(oa.keys().collect::<Vec<_>>(), ob.keys().collect::<Vec<_>>());
+    for (k, v) in &oa {
+        assert!(v == &ob[k], "{k} differs between 1 and 2 threads");
+    }
+}
+
+#[test]
+fn shards_merged_equal_a_single_run() {
+    let (single, s1, s2, merged) = (tmp("single"), tmp("s1"), tmp("s2"), tmp("merged"));
+    run_study("gap", &cfg(&single, 2, None)).unwrap();
+    let r1 = run_study("gap", &cfg(&s1, 1, Some(Shard { index: 1, count: 2 }))).unwrap();
+    let r2 = run_study("gap", &cfg(&s2, 1, Some(Shard { index: 2, count: 2 }))).unwrap();
+    assert!(!r1.reported && r1.summary.ran > 0 && r2.summary.ran > 0);
+    assert_eq!(r1.summary.ran + r2.summary.ran, r1.summary.total);
+    // One shard alone is incomplete: merge names the missing cases.
+    let err = merge(&[s1.clone()], &tmp("partial"), &studies_dir()).unwrap_err();
+    assert!(err.to_string().contains("missing ids"), "{err}");
+    merge(&[s1, s2], &merged, &studies_dir()).unwrap();
+    let (a, b) = (outputs(&single.join("gap")), outputs(&merged.join("gap")));
+    assert!(a.contains_key("gap.csv"));
+    for (k, v) in &a {
+        assert!(
+            b.get(k) == Some(v),
+            "{k} differs between single run and merged shards"
+        );
+    }
+}
+
+#[test]
+fn resume_skips_finished_cases() {
+    let out = tmp("resume");
+    let first = run_study("modes", &cfg(&out, 2, None)).unwrap();
+    assert!(first.summary.ran > 0 && first.summary.skipped == 0);
+    let again = run_study("modes", &cfg(&out, 2, None)).unwrap();
+    assert_eq!(again.summary.ran, 0);
+    assert_eq!(again.summary.skipped, first.summary.total);
+    // Remove one case file: only that case runs again.
+    let cases = out.join("modes").join("cases");
+    let one = std::fs::read_dir(&cases)
+        .unwrap()
+        .next()
+        .unwrap()
+        .unwrap()
+        .path();
+    std::fs::remove_file(one).unwrap();
+    let third = run_study("modes", &cfg(&out, 2, None)).unwrap();
+    assert_eq!(third.summary.ran, 1);
+}
+
+#[test]
+fn failing_cases_become_rows() {
+    let out = tmp("fail");
+    let base = CaseSpec::new("paper/scene.toml", solvers::Method::Momentum)
+        .with("contacts.0.restitution", "0.5")
+        .with("analysis.duration", "10.0");
+    let storm = base.clone().with("momentum.persistent_contact", "false");
+    let bad = base.clone().with("contacts.0.restitution", "1.5");
+    let specs = vec![base.clone(), storm.clone(), bad.clone()];
+    let opts = EngineOptions {
+        study_dir: out.clone(),
+        studies_dir: studies_dir(),
+        threads: Some(2),
+        shard: None,
+        progress: false,
+    };
+    let s = run_cases(&specs, &opts).unwrap();
+    assert_eq!((s.ran, s.failed), (3, 2));
+    let res = studies::sweep::collect("t", &specs, &out).unwrap();
+    assert_eq!(res.get(&base).status, "ok");
+    assert_eq!(res.get(&storm).error_kind.as_deref(), Some("EventStorm"));
+    assert_eq!(res.get(&bad).error_kind.as_deref(), Some("Scene"));
+    assert!(res
+        .get(&bad)
+        .error
+        .as_ref()
+        .unwrap()
+        .contains("restitution"));
+    studies::sweep::write_cases_table(&out, &res).unwrap();
+    let csv = std::fs::read_to_string(out.join("cases.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 4);
+    assert!(csv.contains("EventStorm"));
+}
+
+#[test]
+fn case_ids_are_stable() {
+    let a = CaseSpec::new("paper/scene.toml", solvers::Method::Gap)
+        .with("b", 2)
+        .with("a", 1);
+    let b = CaseSpec::new("paper/scene.toml", solvers::Method::Gap)
+        .with("a", 1)
+        .with("b", 2);
+    assert_eq!(a.id, b.id);
+    assert_eq!(a.id.len(), 16);
+    assert_ne!(a.id, a.clone().with("a", 3).id);
+}
