@@ -386,13 +386,32 @@ pub fn ramp(t: f64) -> RGBColor {
     RGBColor(253, 231, 37)
 }
 
-fn min_spacing(mut v: Vec<f64>) -> f64 {
-    v.sort_by(|a, b| a.total_cmp(b));
-    v.dedup();
-    v.windows(2)
-        .map(|w| w[1] - w[0])
-        .fold(f64::INFINITY, f64::min)
-        .min(1e300)
+/// Distinct sorted grid values with the edges of their cells: (value, low edge, high edge),
+/// edges at midpoints between neighbours, the outer cells as wide as their inner half.
+fn cell_edges(v: &[f64]) -> Vec<(f64, f64, f64)> {
+    let mut u: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
+    u.sort_by(f64::total_cmp);
+    u.dedup();
+    let n = u.len();
+    (0..n)
+        .map(|i| {
+            let lo = if i > 0 {
+                0.5 * (u[i - 1] + u[i])
+            } else if n > 1 {
+                u[0] - 0.5 * (u[1] - u[0])
+            } else {
+                u[0] - 0.5
+            };
+            let hi = if i + 1 < n {
+                0.5 * (u[i] + u[i + 1])
+            } else if n > 1 {
+                u[i] + 0.5 * (u[i] - u[i - 1])
+            } else {
+                u[0] + 0.5
+            };
+            (u[i], lo, hi)
+        })
+        .collect()
 }
 
 fn draw_heat<DB: DrawingBackend>(
@@ -401,12 +420,18 @@ fn draw_heat<DB: DrawingBackend>(
 ) -> std::result::Result<(), DErr> {
     let xs: Vec<f64> = h.cells.iter().map(|c| tr(c.0, h.log_x)).collect();
     let ys: Vec<f64> = h.cells.iter().map(|c| tr(c.1, h.log_y)).collect();
-    let hw = 0.5 * min_spacing(xs.clone()).min(1.0).max(1e-9);
-    let hh = 0.5 * min_spacing(ys.clone()).min(1.0).max(1e-9);
-    let x0 = xs.iter().cloned().fold(f64::INFINITY, f64::min) - hw;
-    let x1 = xs.iter().cloned().fold(f64::NEG_INFINITY, f64::max) + hw;
-    let y0 = ys.iter().cloned().fold(f64::INFINITY, f64::min) - hh;
-    let y1 = ys.iter().cloned().fold(f64::NEG_INFINITY, f64::max) + hh;
+    // Cells tile the plane: each spans to the midpoints between its grid neighbours, so a
+    // non-uniform grid (1e-2, 5e-3, 2e-3 … on a log axis) leaves no gaps.
+    let (xe, ye) = (cell_edges(&xs), cell_edges(&ys));
+    let span = |v: f64, e: &[(f64, f64, f64)]| {
+        e.iter()
+            .find(|c| c.0 == v)
+            .map_or((v - 0.5, v + 0.5), |c| (c.1, c.2))
+    };
+    let x0 = xe.first().map_or(0.0, |c| c.1);
+    let x1 = xe.last().map_or(1.0, |c| c.2);
+    let y0 = ye.first().map_or(0.0, |c| c.1);
+    let y1 = ye.last().map_or(1.0, |c| c.2);
     let mut chart = ChartBuilder::on(area)
         .caption(&h.title, ("sans-serif", 17))
         .margin(8)
@@ -433,7 +458,7 @@ fn draw_heat<DB: DrawingBackend>(
         tr(h.value_range.1, h.log_value),
     );
     for (i, c) in h.cells.iter().enumerate() {
-        let (x, y) = (xs[i], ys[i]);
+        let ((xl, xh), (yl, yh)) = (span(xs[i], &xe), span(ys[i], &ye));
         let (fill, text) = match c.2 {
             Some(v) if v.is_finite() => {
                 let t = (tr(v.max(1e-300), h.log_value) - lo) / (hi - lo);
@@ -443,7 +468,7 @@ fn draw_heat<DB: DrawingBackend>(
         };
         chart
             .draw_series(std::iter::once(Rectangle::new(
-                [(x - hw, y - hh), (x + hw, y + hh)],
+                [(xl, yl), (xh, yh)],
                 fill.filled(),
             )))
             .map_err(err)?;
@@ -452,7 +477,7 @@ fn draw_heat<DB: DrawingBackend>(
         chart
             .draw_series(std::iter::once(Text::new(
                 text,
-                (x - 0.6 * hw, y),
+                (xl + 0.2 * (xh - xl), 0.5 * (yl + yh)),
                 ("sans-serif", 11).into_font().color(&tc),
             )))
             .map_err(err)?;

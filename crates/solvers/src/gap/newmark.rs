@@ -19,7 +19,11 @@
 //! - Energy: input Σ −Δuᵀ M 1 ā_g, damping Σ Δt v̄ᵀ C v̄, contact work Σ Δδ F̄ (trapezoidal
 //!   sums, exact for the linear part of the scheme, so the balance error is the energy the
 //!   scheme creates or destroys at the contacts).
-//! - Peak responses and history at every step.
+//! - Peak responses are taken where the event-driven solvers take them: at the record's
+//!   sample instants (when the record step is a whole number of Newmark steps; otherwise at
+//!   every step) and at the steps where a contact closes or opens. Sampling every step
+//!   would report peaks between record instants, up to ~1 % above the record-instant peaks
+//!   on the paper scene, a difference of sampling, not of integration. History: every step.
 
 use nalgebra::{DMatrix, DVector};
 use structure::Scene;
@@ -179,8 +183,17 @@ pub(crate) fn run(
     let mut alpha = vec![0.0; nc];
     let mut vc_trial = vec![0.0; nc];
 
+    // Peak sampling stride: record instants when the record step is a whole number of steps.
+    let ratio = sys.sample_dt / dt;
+    let stride = if ratio >= 1.0 && (ratio - ratio.round()).abs() < 1e-6 * ratio {
+        ratio.round() as u64
+    } else {
+        1
+    };
+
     for step in 0..nsteps {
         let t1 = (step + 1) as f64 * dt;
+        let mut contact_changed = false;
         let ag1 = sys.ground_at(t1);
         for ci in 0..nc {
             vc_trial[ci] = if active[ci] {
@@ -321,6 +334,9 @@ pub(crate) fn run(
                 ep.peak_force = ep.peak_force.max(f_new[ci]);
                 ep.max_pen = ep.max_pen.max(d1);
             }
+            if now != active[ci] {
+                contact_changed = true;
+            }
             if !now && active[ci] {
                 impacts.push(episodes[ci].impact(ci, t1, dd1, impulse[ci]));
                 stats.events += 1;
@@ -333,7 +349,11 @@ pub(crate) fn run(
         acc.copy_from_slice(&a_new);
         ag = ag1;
         stats.steps += 1;
-        sys.observe(&mut tracker, &u);
+        if (step + 1) % stride == 0 || step + 1 == nsteps || contact_changed {
+            sys.observe(&mut tracker, &u);
+        } else {
+            sys.history_row(&mut tracker, &u);
+        }
         tracker.sample(t1, history.as_deref_mut());
     }
 

@@ -204,12 +204,30 @@ impl Study for Modes {
                     f(at(&r1, 5.0), 2), f(at(&r2, 5.0), 2), f(at(&r1, 10.0), 2), f(at(&r2, 10.0), 2)
                 ));
             }
-            let first = pa.first().map(|p| p.1);
-            let last = pa.last().map(|p| p.1);
+            let at_n =
+                |v: &Vec<(f64, f64)>, n: usize| v.iter().find(|p| p.0 == n as f64).map(|p| p.1);
+            let (n0, n1) = (ns[0], ns[ns.len() - 1]);
             let emin_all = pe.iter().map(|p| p.1).fold(f64::INFINITY, f64::min);
+            let restitution = if emin_all >= d.restitution - 1e-9 {
+                format!(
+                    "the achieved restitution stays at the target {} for every mode count",
+                    d.restitution
+                )
+            } else {
+                let worst_n = pe
+                    .iter()
+                    .find(|p| p.1 == emin_all)
+                    .map_or(0, |p| p.0 as usize);
+                format!(
+                    "the achieved restitution falls to {} with {worst_n} mode(s) (target {})",
+                    f(Some(emin_all), 3),
+                    d.restitution
+                )
+            };
             reading.push(format!(
-                "{var} impulse: the top-story amplification of building 1 (mean over records) goes from {} with {} mode(s) to {} with {}; the achieved restitution falls as low as {} (target {}).",
-                f(first, 2), ns[0], f(last, 2), ns[ns.len() - 1], f(Some(emin_all), 3), d.restitution
+                "{var} impulse: the top-story amplification (mean over records) of building 1 goes from {} with {n0} mode(s) to {} with {n1}, of building 2 from {} to {}; with 10 modes {} and {}; {restitution}.",
+                f(at_n(&pa, n0), 2), f(at_n(&pa, n1), 2), f(at_n(&pb, n0), 2), f(at_n(&pb, n1), 2),
+                f(at_n(&pa, 10), 2), f(at_n(&pb, 10), 2)
             ));
         }
         let _ = record_label;

@@ -32,7 +32,10 @@ struct Def {
     record_x: String,
     record_y: String,
     gaps: Vec<f64>,
-    fewer_modes: usize,
+    /// Mode counts for extra momentum columns (consistent impulse).
+    fewer_modes: Vec<usize>,
+    /// Mode count for the paper's own impulse (eqs 23–24 projected on the kept modes).
+    paper_impulse_modes: usize,
     gap_stiffness: f64,
     spectrum_damping: f64,
     reference: Vec<Reference>,
@@ -41,8 +44,29 @@ struct Def {
 #[derive(Clone, Copy, PartialEq)]
 enum Variant {
     MomentumAll,
-    MomentumFew,
+    MomentumFew(usize),
+    PaperImpulse(usize),
     GapElement,
+}
+
+impl Variant {
+    fn label(self, d: &Def) -> String {
+        match self {
+            Variant::MomentumAll => "momentum, all modes".into(),
+            Variant::MomentumFew(n) => format!("momentum, {n} modes"),
+            Variant::PaperImpulse(n) => format!("paper impulse, {n} modes"),
+            Variant::GapElement => format!("gap element k = {:e}", d.gap_stiffness),
+        }
+    }
+}
+
+/// The X-component variants of Table 2, in column order.
+fn x_variants(d: &Def) -> Vec<Variant> {
+    let mut v = vec![Variant::MomentumAll];
+    v.extend(d.fewer_modes.iter().map(|&n| Variant::MomentumFew(n)));
+    v.push(Variant::PaperImpulse(d.paper_impulse_modes));
+    v.push(Variant::GapElement);
+    v
 }
 
 fn case(ctx: &Ctx, d: &Def, record: &str, gap: f64, v: Variant) -> CaseSpec {
@@ -56,10 +80,14 @@ fn case(ctx: &Ctx, d: &Def, record: &str, gap: f64, v: Variant) -> CaseSpec {
         Variant::MomentumAll => base(Method::Momentum)
             .with("momentum.impulse", "consistent")
             .param("variant", "momentum, all modes"),
-        Variant::MomentumFew => base(Method::Momentum)
+        Variant::MomentumFew(n) => base(Method::Momentum)
             .with("momentum.impulse", "consistent")
-            .with("momentum.modes", d.fewer_modes)
-            .param("variant", format!("momentum, {} modes", d.fewer_modes)),
+            .with("momentum.modes", n)
+            .param("variant", format!("momentum, {n} modes")),
+        Variant::PaperImpulse(n) => base(Method::Momentum)
+            .with("momentum.impulse", "paper")
+            .with("momentum.modes", n)
+            .param("variant", format!("momentum, paper impulse, {n} modes")),
         Variant::GapElement => base(Method::Gap)
             .with("gap_element.law", "linear")
             .with("gap_element.integrator", "adaptive")
@@ -81,16 +109,11 @@ impl Study for Paper {
     fn cases(&self, ctx: &Ctx) -> Result<Vec<CaseSpec>> {
         let d: Def = ctx.def()?;
         let mut v = Vec::new();
-        for rec in [&d.record_x, &d.record_y] {
-            for &gap in &d.gaps {
-                for var in [
-                    Variant::MomentumAll,
-                    Variant::MomentumFew,
-                    Variant::GapElement,
-                ] {
-                    v.push(case(ctx, &d, rec, gap, var));
-                }
+        for &gap in &d.gaps {
+            for var in x_variants(&d) {
+                v.push(case(ctx, &d, &d.record_x, gap, var));
             }
+            v.push(case(ctx, &d, &d.record_y, gap, Variant::MomentumAll));
         }
         v.push(history_case(ctx, &d));
         Ok(v)
@@ -213,34 +236,31 @@ impl Study for Paper {
         // Table 2.
         let floors = scene.buildings[0].n_floors();
         let names: Vec<String> = scene.buildings.iter().map(|b| b.name.clone()).collect();
+        let xv = x_variants(&d);
         let mut tables = Vec::new();
         let mut profile_panels = Vec::new();
         for (gi, &gap) in d.gaps.iter().enumerate() {
             let reference = d.reference.iter().find(|r| (r.gap - gap).abs() < 1e-9);
-            let amp = |rec: &str, v| amplification(res, &case(ctx, &d, rec, gap, v));
-            let (ma, mf, ge, my) = (
-                amp(&d.record_x, Variant::MomentumAll),
-                amp(&d.record_x, Variant::MomentumFew),
-                amp(&d.record_x, Variant::GapElement),
-                amp(&d.record_y, Variant::MomentumAll),
-            );
+            let amps: Vec<Option<Vec<Vec<f64>>>> = xv
+                .iter()
+                .map(|&v| amplification(res, &case(ctx, &d, &d.record_x, gap, v)))
+                .collect();
+            let my = amplification(res, &case(ctx, &d, &d.record_y, gap, Variant::MomentumAll));
             let cm = (gap * 100.0).round();
+            let mut header: Vec<String> = vec!["building".into(), "story".into(), "paper X".into()];
+            header.extend(xv.iter().map(|v| v.label(&d)));
+            header.push("paper Y".into());
+            header.push(format!(
+                "{} in the impact direction (momentum, all modes)",
+                record_label(&d.record_y)
+            ));
+            let header_refs: Vec<&str> = header.iter().map(|h| h.as_str()).collect();
             let mut t = Table::new(
                 &format!(
-                    "Table 2, {cm:.0} cm gap: amplification factors (c_r = 1), X = {}, Y = {}",
+                    "Table 2, {cm:.0} cm gap: amplification factors of the maximum story shear (c_r = 1), X = {}",
                     record_label(&d.record_x),
-                    record_label(&d.record_y)
                 ),
-                &[
-                    "building",
-                    "floor",
-                    "paper X",
-                    "momentum, all modes",
-                    &format!("momentum, {} modes", d.fewer_modes),
-                    &format!("gap element k = {:e}", d.gap_stiffness),
-                    "paper Y",
-                    "model Y (momentum, all modes)",
-                ],
+                &header_refs,
             );
             for b in 0..names.len() {
                 let pick = |a: &Option<Vec<Vec<f64>>>, j: usize| {
@@ -261,66 +281,64 @@ impl Study for Paper {
                         &r.building2_y
                     }
                 });
-                let mut prof: Vec<Series> = Vec::new();
-                let mut pts = [Vec::new(), Vec::new(), Vec::new(), Vec::new()];
+                let mut pts: Vec<Vec<(f64, f64)>> = vec![Vec::new(); xv.len() + 1];
                 for fl in (1..=floors).rev() {
                     let j = fl - 1;
                     let px = refx.and_then(|v| v.get(floors - fl).copied());
                     let py = refy.and_then(|v| v.get(floors - fl).copied());
-                    t.push(vec![
-                        names[b].clone(),
-                        fl.to_string(),
-                        f(px, 3),
-                        f(pick(&ma, j), 3),
-                        f(pick(&mf, j), 3),
-                        f(pick(&ge, j), 3),
-                        f(py, 3),
-                        f(pick(&my, j), 3),
-                    ]);
-                    for (k, val) in [px, pick(&ma, j), pick(&mf, j), pick(&ge, j)]
-                        .iter()
-                        .enumerate()
-                    {
+                    let mut row = vec![names[b].clone(), fl.to_string(), f(px, 3)];
+                    row.extend(amps.iter().map(|a| f(pick(a, j), 3)));
+                    row.push(f(py, 3));
+                    row.push(f(pick(&my, j), 3));
+                    t.push(row);
+                    let vals = std::iter::once(px).chain(amps.iter().map(|a| pick(a, j)));
+                    for (k, val) in vals.enumerate() {
                         if let Some(x) = val {
-                            pts[k].push((*x, fl as f64));
+                            pts[k].push((x, fl as f64));
                         }
                     }
                 }
-                let labels = [
-                    "paper X",
-                    "momentum, all modes",
-                    &format!("momentum, {} modes", d.fewer_modes),
-                    &format!("gap element k={:e}", d.gap_stiffness),
+                let markers = [
+                    Marker::Circle,
+                    Marker::Triangle,
+                    Marker::Cross,
+                    Marker::Circle,
+                    Marker::Triangle,
+                    Marker::Cross,
                 ];
-                for (k, p) in pts.into_iter().enumerate() {
-                    let s = Series::line(labels[k], p, if k == 0 { 7 } else { k - 1 }).marker(
-                        [
-                            Marker::Square,
-                            Marker::Circle,
-                            Marker::Triangle,
-                            Marker::Cross,
-                        ][k],
-                    );
-                    prof.push(if k == 0 { s.dashed() } else { s });
-                }
+                let prof: Vec<Series> = pts
+                    .into_iter()
+                    .enumerate()
+                    .map(|(k, p)| {
+                        if k == 0 {
+                            Series::line("paper X", p, 7)
+                                .marker(Marker::Square)
+                                .dashed()
+                        } else {
+                            Series::line(&xv[k - 1].label(&d), p, k - 1)
+                                .marker(markers[(k - 1) % markers.len()])
+                        }
+                    })
+                    .collect();
                 profile_panels.push(PanelKind::Xy(Panel {
                     title: format!("{}, {cm:.0} cm gap", names[b]),
                     x_label: "amplification factor".into(),
-                    y_label: "floor".into(),
+                    y_label: "story".into(),
                     series: prof,
                     legend_right: true,
                     no_legend: gi + b > 0,
                     ..Default::default()
                 }));
-                let top = |a: &Option<Vec<Vec<f64>>>| pick(a, floors - 1);
                 let ptop = refx.and_then(|v| v.first().copied());
+                let parts: Vec<String> = xv
+                    .iter()
+                    .zip(&amps)
+                    .map(|(v, a)| format!("{} ({})", f(pick(a, floors - 1), 2), v.label(&d)))
+                    .collect();
                 reading.push(format!(
-                    "{cm:.0} cm gap, {}: top-story amplification {} (momentum, all modes), {} ({} modes), {} (gap element) against the paper's {}.",
+                    "{cm:.0} cm gap, {}: top-story amplification {} against the paper's {}.",
                     names[b],
-                    f(top(&ma), 2),
-                    f(top(&mf), 2),
-                    d.fewer_modes,
-                    f(top(&ge), 2),
+                    parts.join(", "),
                     f(ptop, 2)
                 ));
             }
@@ -333,7 +351,7 @@ impl Study for Paper {
             (1100, 900),
             (2, 2),
             &profile_panels,
-            "Amplification factor over height (Table 2, X component): paper, momentum method (all and fewer modes), gap element.",
+            "Amplification factor over height (Table 2, X component): paper and pound's variants.",
         )?;
 
         // Figure 2.
