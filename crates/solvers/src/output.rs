@@ -23,7 +23,9 @@ pub struct Impact {
     pub relative_velocity_before: f64,
     /// u̇_left − u̇_right just after the impulse or at contact opening, m/s.
     pub relative_velocity_after: f64,
-    /// −after / before: the restitution actually achieved.
+    /// −after / before: the restitution actually achieved. NaN (`null` in JSON) for a
+    /// momentum-method impact whose approach speed is below `momentum.capture_velocity`
+    /// (a touching contact, such as the capture that starts a persistent phase).
     pub achieved_restitution: f64,
     /// Impulse transmitted, N·s.
     pub impulse: f64,

@@ -868,10 +868,13 @@ impl<'a> Stepper<'a> {
                 time: t,
                 relative_velocity_before: vb,
                 relative_velocity_after: v_after_report[k],
-                achieved_restitution: if vb > 0.0 {
+                // Undefined for a touching contact (approach below capture_velocity, e.g. the
+                // capture that starts a persistent phase): −after/before would divide
+                // round-off by round-off.
+                achieved_restitution: if vb > p.options.capture_velocity {
                     -v_after_report[k] / vb
                 } else {
-                    0.0
+                    f64::NAN
                 },
                 impulse: impulses[k],
                 duration: None,
