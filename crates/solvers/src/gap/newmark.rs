@@ -34,6 +34,29 @@ use crate::{History, Impact, RunOutput, SolverError, Stats};
 
 const MAX_NEWTON: usize = 50;
 
+/// Peak-sampling stride of the fixed-step Newmark run: the number of steps per record
+/// interval when the record step `sample_dt` is a whole number of steps `dt`, else 1.
+pub(crate) fn peak_stride(sample_dt: f64, dt: f64) -> u64 {
+    let ratio = sample_dt / dt;
+    if ratio >= 1.0 && (ratio - ratio.round()).abs() < 1e-6 * ratio {
+        ratio.round() as u64
+    } else {
+        1
+    }
+}
+
+/// The Newmark step actually used for `scene` (s) and its peak-sampling stride (see
+/// [`peak_stride`]), for tools that reproduce the run elsewhere (the OpenSees export).
+pub fn step_and_peak_stride(scene: &Scene) -> (f64, u64) {
+    let nsteps = ((scene.duration / scene.gap_element.time_step).ceil() as u64).max(1);
+    let dt = scene.duration / nsteps as f64;
+    let sample_dt = scene
+        .ground
+        .as_ref()
+        .map_or(super::FREE_VIBRATION_SAMPLE, |g| g.dt);
+    (dt, peak_stride(sample_dt, dt))
+}
+
 pub(crate) fn run(
     scene: &Scene,
     sys: &System,
@@ -183,13 +206,7 @@ pub(crate) fn run(
     let mut alpha = vec![0.0; nc];
     let mut vc_trial = vec![0.0; nc];
 
-    // Peak sampling stride: record instants when the record step is a whole number of steps.
-    let ratio = sys.sample_dt / dt;
-    let stride = if ratio >= 1.0 && (ratio - ratio.round()).abs() < 1e-6 * ratio {
-        ratio.round() as u64
-    } else {
-        1
-    };
+    let stride = peak_stride(sys.sample_dt, dt);
 
     for step in 0..nsteps {
         let t1 = (step + 1) as f64 * dt;
