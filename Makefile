@@ -18,7 +18,7 @@ test:
 	$(CARGO) test --release --workspace
 
 studies: build
-	./target/release/pound studies run --all --out results
+	./target/release/pound studies run --all --fresh --out results
 
 bench:
 	$(CARGO) bench -p solvers

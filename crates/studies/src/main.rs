@@ -140,6 +140,10 @@ enum StudiesCommand {
         /// Small grids, one record, 12 s of analysis (smoke tests).
         #[arg(long)]
         quick: bool,
+        /// Recompute every case even if a finished case file exists (and remove case files
+        /// the studies no longer name); without it a rerun resumes. `make studies` uses it.
+        #[arg(long)]
+        fresh: bool,
     },
     /// Merge shard outputs (output folders of `studies run --shard`), check that every case
     /// is present (listing missing ids otherwise) and write the tables and figures.
@@ -342,6 +346,7 @@ fn studies_command(command: StudiesCommand) -> Result<()> {
             shard,
             threads,
             quick,
+            fresh,
         } => {
             let names: Vec<String> = if all {
                 st::NAMES.iter().map(|s| s.to_string()).collect()
@@ -386,6 +391,7 @@ fn studies_command(command: StudiesCommand) -> Result<()> {
                     records: recs,
                 },
                 progress: true,
+                fresh,
             };
             let t0 = std::time::Instant::now();
             let mut timings = serde_json::Map::new();

@@ -487,6 +487,9 @@ pub struct EngineOptions {
     pub shard: Option<Shard>,
     /// Show a progress bar (only drawn when stderr is a terminal).
     pub progress: bool,
+    /// Recompute every case of the shard even if its case file exists, and remove case
+    /// files of ids the study no longer has.
+    pub fresh: bool,
 }
 
 /// What [`run_cases`] did.
@@ -522,6 +525,27 @@ pub fn dedup(specs: Vec<CaseSpec>) -> Vec<CaseSpec> {
         .collect()
 }
 
+/// Removes case files whose id is not among `specs` (left by an older definition).
+fn remove_orphans(specs: &[CaseSpec], study_dir: &Path) -> Result<()> {
+    let ids: std::collections::HashSet<&str> = specs.iter().map(|s| s.id.as_str()).collect();
+    let Ok(entries) = std::fs::read_dir(study_dir.join("cases")) else {
+        return Ok(());
+    };
+    for e in entries.flatten() {
+        let p = e.path();
+        let orphan = p.extension().is_some_and(|x| x == "json")
+            && p.file_stem()
+                .and_then(|s| s.to_str())
+                .is_some_and(|id| !ids.contains(id));
+        if orphan {
+            std::fs::remove_file(&p).map_err(|err| {
+                StudyError::Other(format!("cannot remove {}: {err}", p.display()))
+            })?;
+        }
+    }
+    Ok(())
+}
+
 /// Runs the cases that have no case file yet (and belong to the shard), in parallel,
 /// writing each case file as soon as it is done.
 pub fn run_cases(specs: &[CaseSpec], opts: &EngineOptions) -> Result<RunSummary> {
@@ -529,6 +553,9 @@ pub fn run_cases(specs: &[CaseSpec], opts: &EngineOptions) -> Result<RunSummary>
         total: specs.len(),
         ..Default::default()
     };
+    if opts.fresh {
+        remove_orphans(specs, &opts.study_dir)?;
+    }
     let mut todo = Vec::new();
     for (i, s) in specs.iter().enumerate() {
         if let Some(sh) = opts.shard {
@@ -537,7 +564,7 @@ pub fn run_cases(specs: &[CaseSpec], opts: &EngineOptions) -> Result<RunSummary>
                 continue;
             }
         }
-        if load_case(&opts.study_dir, &s.id).is_some() {
+        if !opts.fresh && load_case(&opts.study_dir, &s.id).is_some() {
             summary.skipped += 1;
         } else {
             todo.push(s);

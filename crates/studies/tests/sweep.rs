@@ -27,6 +27,7 @@ fn cfg(out: &Path, threads: usize, shard: Option<Shard>) -> RunConfig {
             records: vec![],
         },
         progress: false,
+        fresh: false,
     }
 }
 
@@ -99,6 +100,19 @@ fn resume_skips_finished_cases() {
     std::fs::remove_file(one).unwrap();
     let third = run_study("modes", &cfg(&out, 2, None)).unwrap();
     assert_eq!(third.summary.ran, 1);
+    // --fresh recomputes every case and removes case files the study does not name.
+    let stale = cases.join("0000000000000000.json");
+    std::fs::write(&stale, "{}").unwrap();
+    let fresh = run_study(
+        "modes",
+        &RunConfig {
+            fresh: true,
+            ..cfg(&out, 2, None)
+        },
+    )
+    .unwrap();
+    assert_eq!(fresh.summary.ran, first.summary.total);
+    assert!(!stale.exists());
 }
 
 #[test]
@@ -116,6 +130,7 @@ fn failing_cases_become_rows() {
         threads: Some(2),
         shard: None,
         progress: false,
+        fresh: false,
     };
     let s = run_cases(&specs, &opts).unwrap();
     assert_eq!((s.ran, s.failed), (3, 2));

@@ -149,6 +149,8 @@ pub struct RunConfig {
     pub shard: Option<Shard>,
     pub opts: StudyOptions,
     pub progress: bool,
+    /// Recompute cached cases (see [`crate::sweep::EngineOptions::fresh`]).
+    pub fresh: bool,
 }
 
 /// What happened to one study.
@@ -228,6 +230,7 @@ pub fn run_study(name: &str, cfg: &RunConfig) -> Result<StudyRun> {
             threads: cfg.threads,
             shard: cfg.shard,
             progress: cfg.progress,
+            fresh: cfg.fresh,
         },
     )?;
     let reported = cfg.shard.is_none();
@@ -277,6 +280,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path, studies_dir: &Path) -> Result<Vec<Str
             shard: None,
             opts: m.options.clone(),
             progress: false,
+            fresh: false,
         };
         let st = study(name).expect("known study");
         let ctx = make_ctx(
