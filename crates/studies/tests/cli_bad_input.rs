@@ -12,14 +12,9 @@
 //! `crates/structure/tests/scene.rs`.
 
 use std::path::Path;
-use std::process::{Command, Output};
 
 mod common;
-use common::{TempDir, POUND};
-
-fn pound(args: &[String]) -> Output {
-    Command::new(POUND).args(args).output().unwrap()
-}
+use common::{pound, TempDir};
 
 fn s(p: &Path) -> String {
     p.display().to_string()

@@ -6,7 +6,7 @@
 //! same fixed Newmark step.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::{Command, Stdio};
 
 use structure::scene::ContactLaw;
 use structure::testing::paper_scene_path;
@@ -14,7 +14,7 @@ use structure::{GroundMotion, RecordFormat, Scene};
 use studies::export::{opensees_caveats, opensees_script, ExportError};
 
 mod common;
-use common::{TempDir, POUND};
+use common::{pound, TempDir};
 
 fn records_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/ground-motions")
@@ -322,10 +322,6 @@ duration = 1.0
 // ---------------------------------------------------------------------------------------
 // Through the binary
 // ---------------------------------------------------------------------------------------
-
-fn pound(args: &[&str]) -> Output {
-    Command::new(POUND).args(args).output().unwrap()
-}
 
 #[test]
 fn cli_prints_the_script() {

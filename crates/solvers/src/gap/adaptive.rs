@@ -25,7 +25,7 @@ use roots::Convergency;
 use structure::Scene;
 
 use super::dopri::Dopri5;
-use super::{audit, Episode, Mode, Segment, StormGuard, System};
+use super::{audit, output, Episode, Mode, Segment, StormGuard, System};
 use crate::response::ResponseTracker;
 use crate::{History, Impact, RunOutput, SolverError, Stats};
 
@@ -438,7 +438,6 @@ pub(crate) fn run(
             impacts.push(episodes[ci].impact(ci, t, dd, y[imp0 + ci]));
         }
     }
-    impacts.sort_by(|a, b| a.time.total_cmp(&b.time));
     if stats.min_step == f64::INFINITY {
         stats.min_step = 0.0;
     }
@@ -452,16 +451,5 @@ pub(crate) fn run(
         sys.mech_energy(&y[..n], &y[n..2 * n]),
         stored_t,
     );
-    Ok(RunOutput {
-        method: "gap".into(),
-        settings: sys.settings(scene),
-        scene: scene.name.clone(),
-        duration,
-        buildings: tracker.finish(),
-        impacts,
-        persistent_contacts: Vec::new(),
-        energy,
-        stats,
-        r_n: Vec::new(),
-    })
+    Ok(output(sys, scene, tracker.finish(), impacts, energy, stats))
 }

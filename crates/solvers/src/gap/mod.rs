@@ -326,6 +326,31 @@ pub(crate) fn audit(
     }
 }
 
+/// The common result of both gap-element integrators: impacts in time order, no persistent
+/// contacts or r_N (those belong to the momentum method).
+pub(crate) fn output(
+    sys: &System,
+    scene: &Scene,
+    buildings: Vec<crate::output::BuildingResponse>,
+    mut impacts: Vec<crate::Impact>,
+    energy: EnergyAudit,
+    stats: crate::Stats,
+) -> RunOutput {
+    impacts.sort_by(|a, b| a.time.total_cmp(&b.time));
+    RunOutput {
+        method: "gap".into(),
+        settings: sys.settings(scene),
+        scene: scene.name.clone(),
+        duration: scene.duration,
+        buildings,
+        impacts,
+        persistent_contacts: Vec::new(),
+        energy,
+        stats,
+        r_n: Vec::new(),
+    }
+}
+
 /// Tracks one contact episode (closure to opening).
 #[derive(Debug, Clone, Copy, Default)]
 pub(crate) struct Episode {

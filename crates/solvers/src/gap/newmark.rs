@@ -28,7 +28,7 @@
 use nalgebra::{DMatrix, DVector};
 use structure::Scene;
 
-use super::{audit, Episode, StormGuard, System};
+use super::{audit, output, Episode, StormGuard, System};
 use crate::response::ResponseTracker;
 use crate::{History, Impact, RunOutput, SolverError, Stats};
 
@@ -380,7 +380,6 @@ pub(crate) fn run(
             impacts.push(episodes[ci].impact(ci, duration, dd, impulse[ci]));
         }
     }
-    impacts.sort_by(|a, b| a.time.total_cmp(&b.time));
     let stored_t = sys.stored(&u, |i| active[i]);
     let energy = audit(
         initial,
@@ -391,16 +390,5 @@ pub(crate) fn run(
         sys.mech_energy(&u, &v),
         stored_t,
     );
-    Ok(RunOutput {
-        method: "gap".into(),
-        settings: sys.settings(scene),
-        scene: scene.name.clone(),
-        duration,
-        buildings: tracker.finish(),
-        impacts,
-        persistent_contacts: Vec::new(),
-        energy,
-        stats,
-        r_n: Vec::new(),
-    })
+    Ok(output(sys, scene, tracker.finish(), impacts, energy, stats))
 }

@@ -206,7 +206,11 @@ impl Study for Stability {
                         .map_or(r.status.clone(), |x| format!("failed: {x}")),
                 ]);
                 heat_e.cells.push((dt, k, we));
-                heat_r.cells.push((dt, k, re.or(o.map(|_| 0.0))));
+                // No impacts in either run: nothing to miss (0). Impacts in only one: the
+                // restitution cannot be compared; the cell stays undefined (grey).
+                let neither =
+                    o.is_some_and(|o| o.impacts == 0) && rf.is_some_and(|r| r.impacts == 0);
+                heat_r.cells.push((dt, k, re.or(neither.then_some(0.0))));
             }
         }
         reading.push(format!(

@@ -7,6 +7,14 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 /// The `pound` binary under test.
 pub const POUND: &str = env!("CARGO_BIN_EXE_pound");
 
+/// Runs `pound` with `args` and waits for it.
+pub fn pound<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> std::process::Output {
+    std::process::Command::new(POUND)
+        .args(args)
+        .output()
+        .unwrap()
+}
+
 /// A fresh folder under the system temporary directory, removed on drop.
 pub struct TempDir(pub PathBuf);
 
