@@ -16,6 +16,7 @@ pub mod gap;
 pub mod momentum;
 pub mod output;
 pub mod response;
+pub mod rules;
 
 pub use output::{
     BuildingResponse, ContactFlexibility, EnergyAudit, History, Impact, PersistentContact,

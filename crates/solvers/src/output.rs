@@ -27,6 +27,10 @@ pub struct Impact {
     /// momentum-method impact whose approach speed is below `momentum.capture_velocity`
     /// (a touching contact, such as the capture that starts a persistent phase).
     pub achieved_restitution: f64,
+    /// Why `achieved_restitution` is undefined (`null`), when it is: e.g. "touching"
+    /// (approach speed below the capture threshold) or "separating at closure".
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub restitution_undefined: Option<String>,
     /// Impulse transmitted, N·s.
     pub impulse: f64,
     /// Contact duration, s (gap element only).

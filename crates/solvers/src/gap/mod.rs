@@ -379,6 +379,7 @@ impl Episode {
             } else {
                 f64::NAN
             },
+            restitution_undefined: (self.v_before == 0.0).then(|| "no approach speed".into()),
             impulse: impulse1 - self.impulse0,
             duration: Some(t_open - self.t_close),
             peak_force: Some(self.peak_force),

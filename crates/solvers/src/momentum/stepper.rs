@@ -876,6 +876,8 @@ impl<'a> Stepper<'a> {
                 } else {
                     f64::NAN
                 },
+                restitution_undefined: (vb <= p.options.capture_velocity)
+                    .then(|| "touching: approach speed below momentum.capture_velocity".into()),
                 impulse: impulses[k],
                 duration: None,
                 peak_force: None,
