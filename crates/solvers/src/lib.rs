@@ -74,6 +74,12 @@ pub enum SolverError {
         limit: f64,
         context: String,
     },
+    #[error("singular contact system at t = {time:.9} s: contacts {contacts:?} ({context}); are two contacts acting on the same floor pair?")]
+    SingularContact {
+        time: f64,
+        contacts: Vec<usize>,
+        context: String,
+    },
     #[error("the solver cannot go on at t = {time:.9} s: {reason}")]
     Stalled { time: f64, reason: String },
     #[error(transparent)]

@@ -291,6 +291,7 @@ fn solver_error_kind(e: &SolverError) -> &'static str {
         SolverError::StepBudget { .. } => "StepBudget",
         SolverError::EventStorm { .. } => "EventStorm",
         SolverError::Stalled { .. } => "Stalled",
+        SolverError::SingularContact { .. } => "SingularContact",
         SolverError::Model(_) => "Model",
     }
 }

@@ -3,7 +3,8 @@
 //! Within a segment [0, τ] the gap function δ(s) = g·q(s) − gap is known in closed form
 //! ([`super::modal::Arc`]). Sub-steps are short enough (≤ T_min/8) that δ has at most one
 //! extremum per segment, so with the end values (δ₀, δ̇₀, δ₁, δ̇₁):
-//! - δ₀ < 0 ≤ δ₁: one upward crossing, Brent on δ over [0, τ];
+//! - δ₀ < 0 ≤ δ₁: one upward crossing, Brent on δ over [0, τ] (over [s_min, τ] when δ
+//!   falls first, δ̇₀ < 0 < δ̇₁: a rebound followed at once by a new approach);
 //! - δ₀, δ₁ < 0 with δ̇₀ > 0 > δ̇₁: an interior maximum. A rigorous filter first: the cubic
 //!   Hermite interpolant's maximum plus its error bound τ⁴/384·max|δ⁗| (with
 //!   |q_n⁗| ≤ ω_n⁴·|A_n − iB_n| for the homogeneous part) — if that is < 0 nothing closes;
@@ -160,6 +161,12 @@ impl Locator<'_> {
             return None;
         }
         if d1 >= 0.0 {
+            // Falling first (just after a rebound, under a strong push): the crossing is
+            // after the minimum, not at the start where δ is round-off below zero.
+            if dd0 < 0.0 && dd1 > 0.0 {
+                let s_min = self.brent(lo, tau, true);
+                return Some(self.brent(s_min, tau, false));
+            }
             return Some(self.brent(lo, tau, false));
         }
         if dd0 > 0.0 && dd1 < 0.0 {

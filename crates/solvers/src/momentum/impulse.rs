@@ -16,6 +16,8 @@
 
 use structure::Contact;
 
+use crate::SolverError;
+
 use super::modal::Modal;
 
 /// One contact pair in modal form.
@@ -75,12 +77,15 @@ pub fn delassus(contacts: &[ContactGeom], set: &[usize]) -> Vec<Vec<f64>> {
         .collect()
 }
 
-/// Solves the small dense system `a x = b` by Gaussian elimination with partial pivoting.
-pub fn solve_dense(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Option<Vec<f64>> {
+/// Solves the small dense system `a x = b` (Gaussian elimination, partial pivoting);
+/// `None` when `a` is singular or ill-conditioned: a pivot below 1e-12 of the largest
+/// diagonal entry, or a non-finite result.
+pub fn solve_checked(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Option<Vec<f64>> {
     let n = b.len();
+    let scale = (0..n).map(|k| a[k][k].abs()).fold(0.0, f64::max);
     for k in 0..n {
         let p = (k..n).max_by(|&i, &j| a[i][k].abs().total_cmp(&a[j][k].abs()))?;
-        if a[p][k].abs() == 0.0 || !a[p][k].is_finite() {
+        if !(a[p][k].abs() > 1e-12 * scale) {
             return None;
         }
         a.swap(k, p);
@@ -98,28 +103,48 @@ pub fn solve_dense(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Option<Vec<f64>> {
         let s: f64 = (k + 1..n).map(|j| a[k][j] * x[j]).sum();
         x[k] = (b[k] - s) / a[k][k];
     }
-    Some(x)
+    x.iter().all(|v| v.is_finite()).then_some(x)
+}
+
+/// Solves W x = b for the Delassus matrix W of `set`, or says that it is singular or
+/// ill-conditioned (two contacts on the same floor pair, for instance): never a silent zero.
+pub fn solve_delassus(
+    contacts: &[ContactGeom],
+    set: &[usize],
+    b: Vec<f64>,
+    time: f64,
+    what: &str,
+) -> Result<Vec<f64>, SolverError> {
+    solve_checked(delassus(contacts, set), b).ok_or_else(|| SolverError::SingularContact {
+        time,
+        contacts: set.to_vec(),
+        context: what.to_string(),
+    })
 }
 
 /// Non-negative impulses P on `set` with W P = target on the retained contacts (the
 /// others get P = 0): solve, drop the most negative, repeat. Returns (contact, P) pairs.
-pub fn lcp_impulses(contacts: &[ContactGeom], set: &[usize], target: &[f64]) -> Vec<(usize, f64)> {
+pub fn lcp_impulses(
+    contacts: &[ContactGeom],
+    set: &[usize],
+    target: &[f64],
+    time: f64,
+) -> Result<Vec<(usize, f64)>, SolverError> {
     let mut active: Vec<usize> = (0..set.len()).collect();
     loop {
         if active.is_empty() {
-            return vec![];
+            return Ok(vec![]);
         }
         let ids: Vec<usize> = active.iter().map(|&k| set[k]).collect();
-        let w = delassus(contacts, &ids);
         let rhs: Vec<f64> = active.iter().map(|&k| target[k]).collect();
-        let p = solve_dense(w, rhs).unwrap_or_else(|| vec![0.0; ids.len()]);
+        let p = solve_delassus(contacts, &ids, rhs, time, "impulses of simultaneous closures")?;
         let (worst, pmin) =
             p.iter().enumerate().fold(
                 (0, f64::INFINITY),
                 |m, (i, &x)| if x < m.1 { (i, x) } else { m },
             );
         if pmin >= 0.0 {
-            return ids.into_iter().zip(p).collect();
+            return Ok(ids.into_iter().zip(p).collect());
         }
         active.remove(worst);
     }

@@ -12,10 +12,17 @@
 //! error is amplified by −2 per step (unstable). With λ constant the velocity error only
 //! alternates in sign (bounded) and λ matches the mean force over the segment.
 //!
-//! Release: when the λ needed over the next segment is negative (tensile), the contact is
-//! released at the segment start (time resolution: one record sub-step).
+//! Release (see `Stepper::persistent_segment`): the *instantaneous* holding force
+//! λ(t) = W⁻¹ δ̈_free(t) (W the Delassus matrix of the held set, δ̈_free the relative
+//! acceleration the floors would have without the contact) is checked at every segment start
+//! and end; where it turns tensile inside a segment the instant is located with Brent's
+//! method on the held trajectory, the phase ends there, and the contact is released with
+//! δ̇ = 0. At every held-segment end the relative velocity of the held contacts is projected
+//! to zero (a plastic micro-impulse whose energy goes to the contact account), so that a
+//! release leaves the floors touching at rest, not drifting together.
 
-use super::impulse::{solve_dense, ContactGeom};
+use super::impulse::{solve_checked, ContactGeom};
+use crate::SolverError;
 use super::modal::{Arc, Modal};
 
 /// Constant forces (N) on the persistent contacts `set` over a segment of length `tau`,
@@ -26,7 +33,8 @@ pub fn contact_forces(
     set: &[usize],
     tau: f64,
     delta_free: &[f64],
-) -> Vec<f64> {
+    time: f64,
+) -> Result<Vec<f64>, SolverError> {
     let chi: Vec<f64> = (0..modal.len())
         .map(|n| {
             Arc::new(modal.omega[n], modal.zeta[n], 0.0, 0.0, 1.0, 1.0, tau)
@@ -46,5 +54,9 @@ pub fn contact_forces(
                 .collect()
         })
         .collect();
-    solve_dense(c, delta_free.to_vec()).unwrap_or_else(|| vec![0.0; set.len()])
+    solve_checked(c, delta_free.to_vec()).ok_or_else(|| SolverError::SingularContact {
+        time,
+        contacts: set.to_vec(),
+        context: "holding forces of a persistent-contact phase".into(),
+    })
 }

@@ -8,6 +8,7 @@ use structure::{MomentumOptions, Scene};
 use super::energy::EnergyAccount;
 use super::events::Locator;
 use super::impulse::{self, ContactGeom};
+use crate::rules::ImpactRateGuard;
 use super::modal::{Arc, Modal, StepCoeffs};
 use super::persistent;
 use crate::response::ResponseTracker;
@@ -16,8 +17,6 @@ use structure::ground::nigam_jennings::Propagator;
 
 /// Simultaneity window for closures, s.
 pub const SIMULTANEOUS: f64 = 1e-12;
-/// Sliding window of the impact-rate guard, s.
-pub const STORM_WINDOW: f64 = 0.05;
 
 /// Everything that does not change during a run.
 #[derive(Debug, Clone)]
@@ -200,8 +199,11 @@ pub struct Stepper<'a> {
     pub phases: Vec<PersistentContact>,
     pub stats: Stats,
     pub diag: Diagnostics,
-    recent: VecDeque<(f64, usize)>,
+    guard: ImpactRateGuard,
     last_impacts: Vec<VecDeque<f64>>,
+    /// Per contact: the instant it was last released or found touching without an impact
+    /// (NaN if never). A closure located at exactly that instant is not a new event.
+    released_at: Vec<f64>,
     xn: Vec<f64>,
     vn: Vec<f64>,
     disp_max: Vec<Vec<f64>>,
@@ -253,8 +255,9 @@ impl<'a> Stepper<'a> {
                 base_step: p.h,
                 ..Diagnostics::default()
             },
-            recent: VecDeque::new(),
+            guard: ImpactRateGuard::new(p.limits.max_impact_rate),
             last_impacts: vec![VecDeque::new(); p.contacts.len()],
+            released_at: vec![f64::NAN; p.contacts.len()],
             xn: vec![0.0; nm],
             vn: vec![0.0; nm],
             win_acc: vec![0.0; nm],
@@ -413,7 +416,7 @@ impl<'a> Stepper<'a> {
                 return Ok(step);
             }
         }
-        self.segment(tau, t_end, None)
+        self.segment(tau, t_end, None, true)
     }
 
     fn finish_grid(&mut self, j: usize, t_end: f64) {
@@ -574,8 +577,15 @@ impl<'a> Stepper<'a> {
         }
     }
 
-    /// General segment of length tau on the closed form, with event location.
-    fn segment(&mut self, tau: f64, t_end: f64, fc: Option<&[f64]>) -> Result<Step, SolverError> {
+    /// General segment of length tau on the closed form, with event location. `grid_end`:
+    /// the segment ends on the base grid point `t_end` (else at `t + tau`, inside the step).
+    fn segment(
+        &mut self,
+        tau: f64,
+        t_end: f64,
+        fc: Option<&[f64]>,
+        grid_end: bool,
+    ) -> Result<Step, SolverError> {
         let p = self.p;
         let j = self.s.j;
         let (a0, a1) = (p.ground(j, self.s.t), p.ground(j, t_end));
@@ -605,11 +615,28 @@ impl<'a> Stepper<'a> {
                 }
                 (d, dd)
             };
-            let mut prev = (ct.delta(&self.s.x), ct.dot(&self.s.v));
+            // A contact released (or left grazing) at this very instant touches at rest with
+            // a holding force that is not compressive: a root at s ≈ 0 would be round-off.
+            // Its search starts a hair later, at s₀ = 1e-6 of the first window (δ changes
+            // by O(δ̈ s₀²) meanwhile, far below any gap of interest).
+            let skip = if self.released_at[ci] == self.s.t {
+                1e-6 * tau / m as f64
+            } else {
+                0.0
+            };
+            let mut prev = if skip > 0.0 {
+                at(skip, &self.arcs)
+            } else {
+                (ct.delta(&self.s.x), ct.dot(&self.s.v))
+            };
             let mut r = None;
             for w in 1..=m {
                 let (lo, hi) = (
-                    tau * (w - 1) as f64 / m as f64,
+                    if w == 1 {
+                        skip
+                    } else {
+                        tau * (w - 1) as f64 / m as f64
+                    },
                     if w == m {
                         tau
                     } else {
@@ -679,8 +706,11 @@ impl<'a> Stepper<'a> {
             self.s.x[n] = x1;
             self.s.v[n] = v1;
         }
-        if s_end == tau {
+        if s_end == tau && grid_end {
             self.finish_grid(j, t_end);
+        } else if s_end == tau {
+            self.s.t = t_end;
+            self.s.on_grid = false;
         } else {
             self.s.t += s_end;
             self.s.on_grid = false;
@@ -690,79 +720,238 @@ impl<'a> Stepper<'a> {
         Ok(step)
     }
 
-    fn persistent_segment(&mut self, tau: f64, t_end: f64) -> Result<Step, SolverError> {
-        let p = self.p;
-        let j = self.s.j;
-        let (a0, a1) = (p.ground(j, self.s.t), p.ground(j, t_end));
-        self.build_arcs(a0, a1, tau, None);
-        let set: Vec<usize> = self.s.persistent.iter().map(|&(c, _)| c).collect();
-        let free_end: Vec<f64> = self.arcs.iter().map(|a| a.xv(tau).0).collect();
+    /// Instantaneous holding forces λ = W⁻¹ δ̈_free (N per unit modal mass, > 0 compressive)
+    /// of the contacts `set` in the state (x, v) under ground acceleration `a_g`, and for
+    /// each a round-off tolerance (1e-9 of the magnitude of the terms of δ̈_free, over W_cc).
+    fn holding_forces(
+        &self,
+        set: &[usize],
+        x: &[f64],
+        v: &[f64],
+        a_g: f64,
+        time: f64,
+    ) -> Result<(Vec<f64>, Vec<f64>), SolverError> {
+        let (p, m) = (self.p, &self.p.modal);
+        let mut acc = vec![0.0; set.len()];
+        let mut tol = vec![0.0; set.len()];
+        for (k, &c) in set.iter().enumerate() {
+            let ct = &p.contacts[c];
+            let (mut a, mut sc) = (0.0, 0.0);
+            for n in 0..m.len() {
+                let g = ct.g[n];
+                if g != 0.0 {
+                    let w = m.omega[n];
+                    let (f, d, s) = (-m.gamma[n] * a_g, 2.0 * m.zeta[n] * w * v[n], w * w * x[n]);
+                    a += g * (f - d - s);
+                    sc += g.abs() * (f.abs() + d.abs() + s.abs());
+                }
+            }
+            acc[k] = a;
+            tol[k] = 1e-9 * sc / ct.dot(&ct.g);
+        }
+        let lam = impulse::solve_delassus(&p.contacts, set, acc, time, "holding forces")?;
+        Ok((lam, tol))
+    }
+
+    /// The held trajectory over [0, s] from the current state: constant forces that bring
+    /// every held gap back to δ = 0 at s (see [`persistent`]). Returns the modal loads of
+    /// the forces and the state at s.
+    fn held_trial(
+        &self,
+        set: &[usize],
+        s: f64,
+    ) -> Result<(Vec<f64>, Vec<f64>, Vec<f64>), SolverError> {
+        let (p, m) = (self.p, &self.p.modal);
+        let (a0, a1) = (p.ground(self.s.j, self.s.t), p.ground(self.s.j, self.s.t + s));
+        let arc = |n: usize, extra: f64| {
+            Arc::new(
+                m.omega[n],
+                m.zeta[n],
+                self.s.x[n],
+                self.s.v[n],
+                -m.gamma[n] * a0 + extra,
+                -m.gamma[n] * a1 + extra,
+                s,
+            )
+        };
+        let free_end: Vec<f64> = (0..m.len()).map(|n| arc(n, 0.0).xv(s).0).collect();
         let dfree: Vec<f64> = set
             .iter()
             .map(|&c| p.contacts[c].delta(&free_end))
             .collect();
-        let lam = persistent::contact_forces(&p.modal, &p.contacts, &set, tau, &dfree);
-        let (worst, lmin) =
-            lam.iter().enumerate().fold(
-                (0, f64::INFINITY),
-                |m, (i, &l)| if l < m.1 { (i, l) } else { m },
-            );
-        if lmin < 0.0 || !lmin.is_finite() {
-            let (c, start) = self.s.persistent.remove(worst);
-            if self.s.t > start {
-                self.phases.push(PersistentContact {
-                    contact: c,
-                    start,
-                    end: self.s.t,
-                    released_by: "tension".into(),
-                });
-            }
-            self.stats.events += 1;
-            return Ok(Step::Released {
-                contact: c,
-                time: self.s.t,
-            });
-        }
-        let mut fc = vec![0.0; p.modal.len()];
+        let lam = persistent::contact_forces(m, &p.contacts, set, s, &dfree, self.s.t)?;
+        let mut fc = vec![0.0; m.len()];
         for (k, &c) in set.iter().enumerate() {
             for (f, g) in fc.iter_mut().zip(&p.contacts[c].g) {
                 *f -= g * lam[k];
             }
         }
-        self.segment(tau, t_end, Some(&fc))
+        let (mut x, mut v) = (vec![0.0; m.len()], vec![0.0; m.len()]);
+        for n in 0..m.len() {
+            (x[n], v[n]) = arc(n, fc[n]).xv(s);
+        }
+        Ok((fc, x, v))
     }
 
-    /// Applies the impulses of the contacts closing now (see [`super::impulse`]).
-    pub fn impact(&mut self, contacts: &[usize]) -> Result<(), SolverError> {
+    /// Smallest holding force (relative to its tolerance) at the end of the held trial of
+    /// length s, and the contact (index into `set`) it belongs to.
+    fn held_end_force(&self, set: &[usize], s: f64) -> Result<(f64, usize), SolverError> {
+        let (x, v) = if s > 0.0 {
+            let (_, x, v) = self.held_trial(set, s)?;
+            (x, v)
+        } else {
+            (self.s.x.clone(), self.s.v.clone())
+        };
+        let a1 = self.p.ground(self.s.j, self.s.t + s);
+        let (lam, tol) = self.holding_forces(set, &x, &v, a1, self.s.t + s)?;
+        Ok(lam
+            .iter()
+            .zip(&tol)
+            .enumerate()
+            .map(|(k, (l, t))| (l / t.max(f64::MIN_POSITIVE), k))
+            .fold((f64::INFINITY, 0), |a, b| if b.0 < a.0 { b } else { a }))
+    }
+
+    /// Sets the relative velocity of the held contacts to zero (a plastic micro-impulse;
+    /// its kinetic energy goes to the contact account).
+    fn project_held(&mut self, set: &[usize]) -> Result<(), SolverError> {
+        let p = self.p;
+        let vrel: Vec<f64> = set.iter().map(|&c| p.contacts[c].dot(&self.s.v)).collect();
+        let imp = impulse::solve_delassus(&p.contacts, set, vrel, self.s.t, "held contacts")?;
+        let ke0 = self.kinetic();
+        let pairs: Vec<(usize, f64)> = set.iter().copied().zip(imp).collect();
+        impulse::apply(&p.contacts, &pairs, &mut self.s.v);
+        self.energy.contact += ke0 - self.kinetic();
+        Ok(())
+    }
+
+    /// Ends the persistent phase of `set[k]` now.
+    fn release(&mut self, contact: usize) -> Step {
+        let t = self.s.t;
+        if let Some(i) = self.s.persistent.iter().position(|&(c, _)| c == contact) {
+            let (c, start) = self.s.persistent.remove(i);
+            if t > start {
+                self.phases.push(PersistentContact {
+                    contact: c,
+                    start,
+                    end: t,
+                    released_by: "tension".into(),
+                });
+            }
+        }
+        self.released_at[contact] = t;
+        self.stats.events += 1;
+        Step::Released { contact, time: t }
+    }
+
+    /// A segment with contacts held together (δ = 0). The phase of a contact ends where its
+    /// instantaneous holding force turns tensile: at the segment start if it already is,
+    /// else at the instant located by Brent's method on the held trajectory.
+    fn persistent_segment(&mut self, tau: f64, t_end: f64) -> Result<Step, SolverError> {
+        let p = self.p;
+        let set: Vec<usize> = self.s.persistent.iter().map(|&(c, _)| c).collect();
+        let a0 = p.ground(self.s.j, self.s.t);
+        let (lam0, tol0) = self.holding_forces(&set, &self.s.x, &self.s.v, a0, self.s.t)?;
+        if let Some(k) = (0..set.len())
+            .filter(|&k| lam0[k] < -tol0[k])
+            .min_by(|&a, &b| (lam0[a] / tol0[a]).total_cmp(&(lam0[b] / tol0[b])))
+        {
+            return Ok(self.release(set[k]));
+        }
+        let (f_end, k_end) = self.held_end_force(&set, tau)?;
+        let (s_hold, release) = if f_end < -1.0 {
+            // The force turns tensile inside: locate where (f(0) ≥ −1 ≥ f(τ)).
+            let err = std::cell::RefCell::new(None);
+            let f = |s: f64| match self.held_end_force(&set, s) {
+                Ok((v, _)) => v + 1.0,
+                Err(e) => {
+                    err.borrow_mut().get_or_insert(e);
+                    f64::NAN
+                }
+            };
+            let mut conv = super::events::Conv {
+                tol: 2.0 * f64::EPSILON * (self.s.t + tau) + 1e-300,
+                iterations: 0,
+            };
+            let r = roots::find_root_brent(0.0, tau, f, &mut conv);
+            if let Some(e) = err.into_inner() {
+                return Err(e);
+            }
+            self.stats.root_iterations += conv.iterations as u64 + 1;
+            (r.unwrap_or(0.0).clamp(0.0, tau), Some(set[k_end]))
+        } else {
+            (tau, None)
+        };
+        if s_hold <= 0.0 {
+            if let Some(c) = release {
+                return Ok(self.release(c));
+            }
+        }
+        let (fc, _, _) = self.held_trial(&set, s_hold)?;
+        let full = s_hold == tau;
+        let t_stop = if full { t_end } else { self.s.t + s_hold };
+        let step = self.segment(s_hold, t_stop, Some(&fc), full)?;
+        self.project_held(&set)?;
+        match (step, release) {
+            (Step::Reached, Some(c)) => Ok(self.release(c)),
+            (step, _) => Ok(step),
+        }
+    }
+
+    /// Resolves the contacts found closing now (see [`super::impulse`]).
+    ///
+    /// Only an *approaching* contact is an impact. A contact found closed while its floors
+    /// separate or are at rest (δ̇ ≤ 0) is not: nothing happens. With persistent contact on,
+    /// a contact touching with an approach speed at most `capture_velocity` is not an impact
+    /// either: it joins the held set if holding it needs a compressive force, and is left to
+    /// graze otherwise. Only impacts feed the impact-rate guard.
+    pub fn impact(&mut self, closing: &[usize]) -> Result<(), SolverError> {
         let p = self.p;
         let t = self.s.t;
         self.stats.events += 1;
-        // Impact-rate guard.
-        for &c in contacts {
-            self.recent.push_back((t, c));
-        }
-        while let Some(&(t0, _)) = self.recent.front() {
-            if t - t0 > STORM_WINDOW {
-                self.recent.pop_front();
+        let mut contacts = Vec::with_capacity(closing.len());
+        let mut touching = Vec::new();
+        for &c in closing {
+            let v = p.contacts[c].dot(&self.s.v);
+            if v <= 0.0 {
+                self.released_at[c] = t;
+            } else if p.options.persistent_contact && v <= p.options.capture_velocity {
+                touching.push(c);
             } else {
-                break;
+                contacts.push(c);
             }
         }
-        let limit = p.limits.max_impact_rate;
-        if self.recent.len() as f64 > (limit * STORM_WINDOW).ceil().max(2.0) {
-            let c = contacts[0];
-            return Err(SolverError::EventStorm {
-                time: t,
-                impacts: self.recent.len(),
-                window: STORM_WINDOW,
-                limit,
-                context: format!(
-                    "contact {c} (c_r = {}); {} with persistent_contact = {}",
-                    p.contacts[c].restitution,
-                    "impacts accumulate (chattering)",
-                    p.options.persistent_contact
-                ),
-            });
+        if !touching.is_empty() {
+            let held: Vec<usize> = self.s.persistent.iter().map(|&(c, _)| c).collect();
+            let mut set = held.clone();
+            set.extend(&touching);
+            let a_g = p.ground(self.s.j, t);
+            let (lam, tol) = self.holding_forces(&set, &self.s.x, &self.s.v, a_g, t)?;
+            let mut join = held;
+            for (k, &c) in set.iter().enumerate().skip(join.len()) {
+                if lam[k] > tol[k] {
+                    join.push(c);
+                    self.s.persistent.push((c, t));
+                    self.last_impacts[c].clear();
+                } else {
+                    self.released_at[c] = t;
+                }
+            }
+            if !join.is_empty() {
+                self.project_held(&join)?;
+            }
+        }
+        if contacts.is_empty() {
+            return Ok(());
+        }
+        let contacts = &contacts[..];
+        for &c in contacts {
+            self.guard.record(t, || {
+                format!(
+                    "contact {c} (c_r = {}) keeps impacting; persistent_contact = {}",
+                    p.contacts[c].restitution, p.options.persistent_contact
+                )
+            })?;
         }
         let v_before: Vec<f64> = contacts
             .iter()
@@ -804,7 +993,7 @@ impl<'a> Stepper<'a> {
                     .zip(&e_eff)
                     .map(|(v, e)| (1.0 + e) * v.max(0.0))
                     .collect();
-                let imp = impulse::lcp_impulses(&p.contacts, contacts, &target);
+                let imp = impulse::lcp_impulses(&p.contacts, contacts, &target, t)?;
                 impulse::apply(&p.contacts, &imp, &mut self.s.v);
                 for (c, pc) in imp {
                     let k = contacts.iter().position(|&x| x == c).unwrap();
@@ -844,7 +1033,7 @@ impl<'a> Stepper<'a> {
                     }
                 }
                 if !corr_set.is_empty() {
-                    let imp = impulse::lcp_impulses(&p.contacts, &corr_set, &target);
+                    let imp = impulse::lcp_impulses(&p.contacts, &corr_set, &target, t)?;
                     impulse::apply(&p.contacts, &imp, &mut self.s.v);
                     for (c, pc) in imp {
                         let k = contacts.iter().position(|&x| x == c).unwrap();
@@ -863,21 +1052,23 @@ impl<'a> Stepper<'a> {
         self.energy.contact += ke0 - ke1;
         for (k, &c) in contacts.iter().enumerate() {
             let vb = v_before[k];
+            let undefined = if vb <= p.options.capture_velocity {
+                Some("touching: approach speed at most momentum.capture_velocity")
+            } else if captured[k] {
+                Some("chattering capture: the accumulating impacts resolved as one plastic impulse")
+            } else {
+                None
+            };
             self.impacts.push(Impact {
                 contact: c,
                 time: t,
                 relative_velocity_before: vb,
                 relative_velocity_after: v_after_report[k],
-                // Undefined for a touching contact (approach below capture_velocity, e.g. the
-                // capture that starts a persistent phase): −after/before would divide
-                // round-off by round-off.
-                achieved_restitution: if vb > p.options.capture_velocity {
-                    -v_after_report[k] / vb
-                } else {
-                    f64::NAN
-                },
-                restitution_undefined: (vb <= p.options.capture_velocity)
-                    .then(|| "touching: approach speed below momentum.capture_velocity".into()),
+                // Undefined for a touching contact (approach at most capture_velocity, with
+                // persistent contact off) and for a chattering capture (the accumulating
+                // sequence of impacts resolved as one plastic impulse): see `restitution`.
+                achieved_restitution: restitution(vb, v_after_report[k], undefined),
+                restitution_undefined: undefined.map(String::from),
                 impulse: impulses[k],
                 duration: None,
                 peak_force: None,
@@ -932,5 +1123,22 @@ impl<'a> Stepper<'a> {
         self.diag.final_x = self.s.x.clone();
         self.diag.final_v = self.s.v.clone();
         Ok(self.p.modal.energy(&self.s.x, &self.s.v))
+    }
+}
+
+/// The restitution an impact achieved, −v⁺/v⁻, or NaN when `undefined` gives a reason.
+/// Values outside [0, 1] by no more than 1e-12 (round-off of v⁺ = −c_r v⁻) are put on the
+/// interval; a larger excursion is reported as computed.
+pub(crate) fn restitution(v_before: f64, v_after: f64, undefined: Option<&str>) -> f64 {
+    if undefined.is_some() {
+        return f64::NAN;
+    }
+    let r = -v_after / v_before;
+    if (-1e-12..0.0).contains(&r) {
+        0.0
+    } else if r > 1.0 && r <= 1.0 + 1e-12 {
+        1.0
+    } else {
+        r
     }
 }
