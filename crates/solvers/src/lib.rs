@@ -45,7 +45,9 @@ impl std::fmt::Display for Method {
 }
 
 /// Why a solver could not go on. Every variant carries the simulated time at which it
-/// stopped and what it was doing.
+/// stopped and what it was doing, except [`SolverError::Refused`]: a scene refused before
+/// anything is allocated or integrated (an input error, exit code 2 in the CLI), because its
+/// estimated work or memory exceeds the limits.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SolverError {
     #[error("step size underflow at t = {time:.9} s: step {step:.3e} s is below the minimum {min_step:.3e} s ({context})")]
@@ -80,6 +82,8 @@ pub enum SolverError {
         contacts: Vec<usize>,
         context: String,
     },
+    #[error("the scene cannot be run with this method: {reason}")]
+    Refused { reason: String },
     #[error("the solver cannot go on at t = {time:.9} s: {reason}")]
     Stalled { time: f64, reason: String },
     #[error(transparent)]

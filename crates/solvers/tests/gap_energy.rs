@@ -94,17 +94,25 @@ fn history_holds_record_points_and_events_in_order() {
 
 #[test]
 fn guards_report_step_budget_and_event_storm() {
+    // Fewer steps allowed than record intervals (8000): refused before anything runs.
     let mut s = paper(&["analysis.max_steps=100"]);
     match gap::solve(&s, None) {
-        Err(SolverError::StepBudget { limit: 100, .. }) => {}
+        Err(SolverError::Refused { reason }) => {
+            assert!(reason.contains("analysis.max_steps = 100"), "{reason}")
+        }
+        other => panic!("expected Refused, got {other:?}"),
+    }
+    // Enough for the record intervals, not for the steps contacts add: stops at run time.
+    s.limits.max_steps = 8001;
+    match gap::solve(&s, None) {
+        Err(SolverError::StepBudget { limit: 8001, .. }) => {}
         other => panic!("expected StepBudget, got {other:?}"),
     }
-    s.limits.max_steps = 50_000_000;
     s.gap_element.integrator = structure::scene::Integrator::Newmark;
     s.limits.max_steps = 10;
     assert!(matches!(
         gap::solve(&s, None),
-        Err(SolverError::StepBudget { .. })
+        Err(SolverError::Refused { .. })
     ));
 
     // A ball bouncing on a heavy, stiff partner under no load keeps impacting elastically at

@@ -454,7 +454,13 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
-            if e.downcast_ref::<InputError>().is_some() {
+            let refused = e.chain().any(|c| {
+                matches!(
+                    c.downcast_ref::<solvers::SolverError>(),
+                    Some(solvers::SolverError::Refused { .. } | solvers::SolverError::Model(_))
+                )
+            });
+            if e.downcast_ref::<InputError>().is_some() || refused {
                 ExitCode::from(2)
             } else if e
                 .chain()

@@ -292,6 +292,7 @@ fn solver_error_kind(e: &SolverError) -> &'static str {
         SolverError::EventStorm { .. } => "EventStorm",
         SolverError::Stalled { .. } => "Stalled",
         SolverError::SingularContact { .. } => "SingularContact",
+        SolverError::Refused { .. } => "Refused",
         SolverError::Model(_) => "Model",
     }
 }

@@ -25,7 +25,7 @@ use roots::Convergency;
 use structure::Scene;
 
 use super::dopri::Dopri5;
-use super::{audit, output, Episode, Mode, Segment, StormGuard, System};
+use super::{audit, output, Episode, Mode, Segment, System};
 use crate::response::ResponseTracker;
 use crate::{History, Impact, RunOutput, SolverError, Stats};
 
@@ -140,7 +140,7 @@ pub(crate) fn run(
     let mut episodes = vec![Episode::default(); nc];
     let mut caps = vec![f64::INFINITY; nc];
     let mut impacts: Vec<Impact> = Vec::new();
-    let mut storm = StormGuard::new(limits.max_impact_rate, duration);
+    let mut storm = crate::rules::ImpactRateGuard::new(limits.max_impact_rate);
     let mut stats = Stats {
         min_step: f64::INFINITY,
         ..Stats::default()
@@ -390,7 +390,7 @@ pub(crate) fn run(
                 } else {
                     open_episode(ci, t, &y, &mut modes, &mut episodes, &mut caps);
                     stats.impacts += 1;
-                    storm.closure(t, ci)?;
+                    storm.record(t, || format!("contact {ci} keeps closing (gap element)"))?;
                 }
                 stats.events += 1;
                 rhs(sys, &seg, &modes, t, &y, &mut dp.k[0]);

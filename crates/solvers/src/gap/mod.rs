@@ -47,12 +47,59 @@ pub const FREE_VIBRATION_SAMPLE: f64 = 1e-3;
 pub fn solve(scene: &Scene, history: Option<&mut History>) -> Result<RunOutput, SolverError> {
     let start = std::time::Instant::now();
     let sys = System::new(scene)?;
+    refuse_too_long(scene, &sys)?;
     let mut out = match scene.gap_element.integrator {
         Integrator::Adaptive => adaptive::run(scene, &sys, history)?,
         Integrator::Newmark => newmark::run(scene, &sys, history)?,
     };
     out.stats.wall_seconds = start.elapsed().as_secs_f64();
     Ok(out)
+}
+
+/// Refuses, before anything is allocated, a run whose step count surely exceeds
+/// `analysis.max_steps`: Newmark needs ⌈duration / Δt⌉ steps; the explicit adaptive pair
+/// at least one step per record interval and, for stability, one per 3.3/ω_max s (the
+/// stability boundary of Dormand–Prince 5(4) on the imaginary axis is near 3.3).
+fn refuse_too_long(scene: &Scene, sys: &System) -> Result<(), SolverError> {
+    let (steps, why) = match scene.gap_element.integrator {
+        Integrator::Newmark => (
+            scene.duration / scene.gap_element.time_step,
+            format!(
+                "steps of gap_element.time_step = {:.3e} s",
+                scene.gap_element.time_step
+            ),
+        ),
+        Integrator::Adaptive => {
+            let by_record = scene.duration / sys.sample_dt;
+            let by_stability = scene.duration * sys.omega_max / 3.3;
+            if by_stability > by_record {
+                (
+                    by_stability,
+                    format!(
+                        "explicit steps (the stiffest building mode, ω = {:.3e} rad/s, limits the \
+                         step to about {:.3e} s; use gap_element.integrator = \"newmark\")",
+                        sys.omega_max,
+                        3.3 / sys.omega_max
+                    ),
+                )
+            } else {
+                (
+                    by_record,
+                    format!("record intervals of {:.3e} s", sys.sample_dt),
+                )
+            }
+        }
+    };
+    if steps.is_finite() && steps <= scene.limits.max_steps as f64 {
+        return Ok(());
+    }
+    Err(SolverError::Refused {
+        reason: format!(
+            "analysis.duration = {:.6e} s needs at least {steps:.3e} {why}, more than \
+             analysis.max_steps = {}",
+            scene.duration, scene.limits.max_steps
+        ),
+    })
 }
 
 /// One building's block of the system.
@@ -89,6 +136,10 @@ pub(crate) struct System {
     /// Record points: spacing and ground samples (m/s²), `None` without a record.
     pub sample_dt: f64,
     pub accel: Option<Vec<f64>>,
+    /// The record itself (for [`structure::ground::GroundMotion::accel_at`]).
+    pub ground: Option<structure::ground::GroundMotion>,
+    /// Largest circular frequency of the buildings, rad/s (explicit-stability estimate).
+    pub omega_max: f64,
 }
 
 /// Mode of one contact during a step of the adaptive integrator.
@@ -121,8 +172,10 @@ impl System {
             (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         let mut off = 0;
         let mut offsets = Vec::new();
+        let mut omega_max: f64 = 0.0;
         for b in &scene.buildings {
             let modes = b.modes()?;
+            omega_max = modes.omega.iter().cloned().fold(omega_max, f64::max);
             let c = b.damping_matrix(&modes);
             let len = b.n_floors();
             let cm: Vec<f64> = (0..len * len).map(|ij| c[(ij / len, ij % len)]).collect();
@@ -164,6 +217,8 @@ impl System {
             v0,
             sample_dt,
             accel,
+            ground: scene.ground.clone(),
+            omega_max,
         })
     }
 
@@ -186,17 +241,7 @@ impl System {
 
     /// Ground acceleration at time t (piecewise linear, 0 outside the record).
     pub fn ground_at(&self, t: f64) -> f64 {
-        match &self.accel {
-            Some(a) => {
-                let x = t / self.sample_dt;
-                if !(x >= 0.0) || x > (a.len() - 1) as f64 {
-                    return 0.0;
-                }
-                let i = (x.floor() as usize).min(a.len() - 2);
-                a[i] + (x - i as f64) * (a[i + 1] - a[i])
-            }
-            None => 0.0,
-        }
+        self.ground.as_ref().map_or(0.0, |g| g.accel_at(t))
     }
 
     /// Restoring forces: `f` ← −K u − C v (N); returns vᵀ C v (W).
@@ -266,14 +311,7 @@ impl System {
 
     /// The record points up to `duration`: number of intervals and the time of point `i`.
     pub fn n_intervals(&self, duration: f64) -> usize {
-        let x = duration / self.sample_dt;
-        let n = x.ceil() as usize;
-        // Tolerate rounding: a duration a hair above a record point does not add an interval.
-        if n > 0 && (x - (n - 1) as f64) < 1e-9 {
-            n - 1
-        } else {
-            n.max(1)
-        }
+        crate::rules::grid_steps(duration, self.sample_dt) as usize
     }
 
     /// Observes every building's floor displacements.
@@ -385,46 +423,5 @@ impl Episode {
             peak_force: Some(self.peak_force),
             max_penetration: Some(self.max_pen),
         }
-    }
-}
-
-/// Event-storm guard: closures in the last simulated second (or the whole run if shorter).
-#[derive(Debug, Clone)]
-pub(crate) struct StormGuard {
-    times: std::collections::VecDeque<f64>,
-    rate: f64,
-    window: f64,
-}
-
-impl StormGuard {
-    pub fn new(rate: f64, duration: f64) -> Self {
-        let window = duration.min(1.0);
-        StormGuard {
-            times: std::collections::VecDeque::with_capacity(1024),
-            rate,
-            window,
-        }
-    }
-
-    pub fn closure(&mut self, t: f64, contact: usize) -> Result<(), SolverError> {
-        self.times.push_back(t);
-        while let Some(&f) = self.times.front() {
-            if f < t - self.window {
-                self.times.pop_front();
-            } else {
-                break;
-            }
-        }
-        let limit = self.rate * self.window;
-        if self.times.len() as f64 > limit.max(1.0) {
-            return Err(SolverError::EventStorm {
-                time: t,
-                impacts: self.times.len(),
-                window: self.window,
-                limit: self.rate,
-                context: format!("contact {contact} keeps closing (gap element)"),
-            });
-        }
-        Ok(())
     }
 }

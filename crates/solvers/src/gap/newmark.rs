@@ -28,7 +28,7 @@
 use nalgebra::{DMatrix, DVector};
 use structure::Scene;
 
-use super::{audit, output, Episode, StormGuard, System};
+use super::{audit, output, Episode, System};
 use crate::response::ResponseTracker;
 use crate::{History, Impact, RunOutput, SolverError, Stats};
 
@@ -48,7 +48,7 @@ pub(crate) fn peak_stride(sample_dt: f64, dt: f64) -> u64 {
 /// The Newmark step actually used for `scene` (s) and its peak-sampling stride (see
 /// [`peak_stride`]), for tools that reproduce the run elsewhere (the OpenSees export).
 pub fn step_and_peak_stride(scene: &Scene) -> (f64, u64) {
-    let nsteps = ((scene.duration / scene.gap_element.time_step).ceil() as u64).max(1);
+    let nsteps = crate::rules::grid_steps(scene.duration, scene.gap_element.time_step);
     let dt = scene.duration / nsteps as f64;
     let sample_dt = scene
         .ground
@@ -65,7 +65,7 @@ pub(crate) fn run(
     let n = sys.n;
     let nc = sys.contacts.len();
     let duration = scene.duration;
-    let nsteps = ((duration / scene.gap_element.time_step).ceil() as u64).max(1);
+    let nsteps = crate::rules::grid_steps(duration, scene.gap_element.time_step);
     let dt = duration / nsteps as f64;
     if nsteps > scene.limits.max_steps {
         return Err(SolverError::StepBudget {
@@ -146,7 +146,7 @@ pub(crate) fn run(
     let mut impulse = vec![0.0; nc];
     let mut episodes = vec![Episode::default(); nc];
     let mut impacts: Vec<Impact> = Vec::new();
-    let mut storm = StormGuard::new(scene.limits.max_impact_rate, duration);
+    let mut storm = crate::rules::ImpactRateGuard::new(scene.limits.max_impact_rate);
     let mut stats = Stats {
         min_step: dt,
         max_step: dt,
@@ -344,7 +344,7 @@ pub(crate) fn run(
                 v_close[ci] = vc_trial[ci];
                 stats.impacts += 1;
                 stats.events += 1;
-                storm.closure(t1, ci)?;
+                storm.record(t1, || format!("contact {ci} keeps closing (gap element)"))?;
             }
             if now {
                 let ep = &mut episodes[ci];

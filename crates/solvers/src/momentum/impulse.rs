@@ -137,7 +137,13 @@ pub fn lcp_impulses(
         }
         let ids: Vec<usize> = active.iter().map(|&k| set[k]).collect();
         let rhs: Vec<f64> = active.iter().map(|&k| target[k]).collect();
-        let p = solve_delassus(contacts, &ids, rhs, time, "impulses of simultaneous closures")?;
+        let p = solve_delassus(
+            contacts,
+            &ids,
+            rhs,
+            time,
+            "impulses of simultaneous closures",
+        )?;
         let (worst, pmin) =
             p.iter().enumerate().fold(
                 (0, f64::INFINITY),

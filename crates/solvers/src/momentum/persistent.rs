@@ -22,8 +22,8 @@
 //! release leaves the floors touching at rest, not drifting together.
 
 use super::impulse::{solve_checked, ContactGeom};
-use crate::SolverError;
 use super::modal::{Arc, Modal};
+use crate::SolverError;
 
 /// Constant forces (N) on the persistent contacts `set` over a segment of length `tau`,
 /// given the free (λ = 0) end gaps `delta_free`.

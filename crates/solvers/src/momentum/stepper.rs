@@ -8,15 +8,30 @@ use structure::{MomentumOptions, Scene};
 use super::energy::EnergyAccount;
 use super::events::Locator;
 use super::impulse::{self, ContactGeom};
-use crate::rules::ImpactRateGuard;
 use super::modal::{Arc, Modal, StepCoeffs};
 use super::persistent;
 use crate::response::ResponseTracker;
+use crate::rules::ImpactRateGuard;
 use crate::{BuildingResponse, History, Impact, PersistentContact, SolverError, Stats};
 use structure::ground::nigam_jennings::Propagator;
 
 /// Simultaneity window for closures, s.
 pub const SIMULTANEOUS: f64 = 1e-12;
+
+/// Largest number of event-check windows per record step (memory: `MAX_SUB` × modes × 64
+/// bytes of propagators; work: as many closed-form checks per step and contact).
+pub const MAX_SUB: usize = 4096;
+
+/// (building, mode) numbers (from 1) of the mode with circular frequency `w`.
+fn stiffest_mode(modal: &Modal, w: f64) -> (usize, usize) {
+    let n = modal.omega.iter().position(|&x| x == w).unwrap_or(0);
+    modal
+        .buildings
+        .iter()
+        .enumerate()
+        .find(|(_, b)| b.range.contains(&n))
+        .map_or((1, n + 1), |(i, b)| (i + 1, n - b.range.start + 1))
+}
 
 /// Everything that does not change during a run.
 #[derive(Debug, Clone)]
@@ -62,11 +77,37 @@ impl Problem {
         let w_max = modal.omega.iter().cloned().fold(0.0, f64::max);
         let t_min = 2.0 * std::f64::consts::PI / w_max;
         let record_dt = scene.ground.as_ref().map_or(t_min / 8.0, |g| g.dt);
-        let sub = if t_min < 8.0 * record_dt {
-            (8.0 * record_dt / t_min).ceil() as usize
+        let sub_f = if t_min < 8.0 * record_dt {
+            (8.0 * record_dt / t_min).ceil()
         } else {
-            1
+            1.0
         };
+        // Refuse, before allocating, what cannot run: the interior check table grows as
+        // record step / shortest period, and the step tables as duration / record step.
+        if !(sub_f <= MAX_SUB as f64) {
+            let (b, n) = stiffest_mode(&modal, w_max);
+            return Err(SolverError::Refused {
+                reason: format!(
+                    "the shortest kept period is {t_min:.3e} s (building {b}, mode {n}), \
+                     {:.3e} times below the record step {record_dt:.3e} s; the momentum method \
+                     checks for contact {MAX_SUB} times per record step at most (8 checks per \
+                     shortest period): keep fewer modes (momentum.modes), or use the gap \
+                     element (--method gap)",
+                    record_dt / t_min
+                ),
+            });
+        }
+        let sub = sub_f as usize;
+        let steps_f = (scene.duration / record_dt).ceil();
+        if !(steps_f <= scene.limits.max_steps as f64) {
+            return Err(SolverError::Refused {
+                reason: format!(
+                    "analysis.duration = {:.6e} s needs {steps_f:.3e} steps of {record_dt:.3e} s, \
+                     more than analysis.max_steps = {}",
+                    scene.duration, scene.limits.max_steps
+                ),
+            });
+        }
         let h = record_dt;
         let checks = (1..sub)
             .map(|k| {
@@ -82,7 +123,7 @@ impl Problem {
                     .collect()
             })
             .collect();
-        let n_steps = ((scene.duration / h) - 1e-9).ceil().max(1.0) as usize;
+        let n_steps = crate::rules::grid_steps(scene.duration, h) as usize;
         let mut ag_start = vec![0.0; n_steps];
         let mut ag_end = vec![0.0; n_steps];
         if let Some(g) = &scene.ground {
@@ -762,7 +803,10 @@ impl<'a> Stepper<'a> {
         s: f64,
     ) -> Result<(Vec<f64>, Vec<f64>, Vec<f64>), SolverError> {
         let (p, m) = (self.p, &self.p.modal);
-        let (a0, a1) = (p.ground(self.s.j, self.s.t), p.ground(self.s.j, self.s.t + s));
+        let (a0, a1) = (
+            p.ground(self.s.j, self.s.t),
+            p.ground(self.s.j, self.s.t + s),
+        );
         let arc = |n: usize, extra: f64| {
             Arc::new(
                 m.omega[n],
