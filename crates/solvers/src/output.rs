@@ -100,6 +100,9 @@ pub struct Stats {
     pub root_iterations: u64,
     /// Newton iterations (Newmark).
     pub newton_iterations: u64,
+    /// Newmark: extra Newton solves because a contact's state (carrying force or not)
+    /// assumed for the step was inconsistent with the law at its solution (active set).
+    pub active_set_iterations: u64,
     /// Smallest and largest accepted step, s.
     pub min_step: f64,
     pub max_step: f64,

@@ -399,6 +399,28 @@ pub(crate) struct Episode {
     pub max_pen: f64,
 }
 
+/// Smallest approach speed at closure for a contact episode to count as an impact whose
+/// restitution is reported, m/s (the default of `momentum.capture_velocity`, so that both
+/// methods call the same contacts "touching").
+pub const IMPACT_MIN_APPROACH_SPEED: f64 = 1e-4;
+
+/// Why an episode's achieved restitution is undefined, if it is. An episode is an impact
+/// when the floors approach at closure faster than [`IMPACT_MIN_APPROACH_SPEED`]; its
+/// restitution −v⁺/v⁻ is reported when it lies in [0, 1]. Outside, the rebound was not set
+/// by the contact law but by the structure and the ground during the contact (long,
+/// ground-driven episodes): reported as null with that reason.
+pub(crate) fn restitution_undefined(v_before: f64, r: f64) -> Option<&'static str> {
+    if v_before <= 0.0 {
+        Some("separating or at rest at closure: not an impact")
+    } else if v_before <= IMPACT_MIN_APPROACH_SPEED {
+        Some("grazing: approach speed below 1e-4 m/s")
+    } else if !(0.0..=1.0).contains(&r) {
+        Some("ground-driven contact: the rebound is not set by the contact law")
+    } else {
+        None
+    }
+}
+
 impl Episode {
     pub fn impact(
         &self,
@@ -407,17 +429,15 @@ impl Episode {
         v_after: f64,
         impulse1: f64,
     ) -> crate::Impact {
+        let r = -v_after / self.v_before;
+        let undefined = restitution_undefined(self.v_before, r);
         crate::Impact {
             contact,
             time: self.t_close,
             relative_velocity_before: self.v_before,
             relative_velocity_after: v_after,
-            achieved_restitution: if self.v_before != 0.0 {
-                -v_after / self.v_before
-            } else {
-                f64::NAN
-            },
-            restitution_undefined: (self.v_before == 0.0).then(|| "no approach speed".into()),
+            achieved_restitution: if undefined.is_some() { f64::NAN } else { r },
+            restitution_undefined: undefined.map(String::from),
             impulse: impulse1 - self.impulse0,
             duration: Some(t_open - self.t_close),
             peak_force: Some(self.peak_force),

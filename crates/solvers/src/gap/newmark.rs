@@ -33,6 +33,8 @@ use crate::response::ResponseTracker;
 use crate::{History, Impact, RunOutput, SolverError, Stats};
 
 const MAX_NEWTON: usize = 50;
+/// Largest number of contact-state sets tried in one step (active-set iteration).
+const MAX_SET_PASSES: usize = 16;
 
 /// Peak-sampling stride of the fixed-step Newmark run: the number of steps per record
 /// interval when the record step `sample_dt` is a whole number of steps `dt`, else 1.
@@ -207,6 +209,18 @@ pub(crate) fn run(
     let mut vc_trial = vec![0.0; nc];
 
     let stride = peak_stride(sys.sample_dt, dt);
+    let mut on = vec![false; nc];
+    let mut visited: Vec<Vec<bool>> = Vec::new();
+    // The law on a frozen state: the smooth branch while `on` (F may be negative: the
+    // active-set check then opens the contact), zero otherwise.
+    let frozen = |c: &super::ContactDof, on: bool, d: f64, dd: f64, vc: f64| {
+        if on {
+            let (kd, kv) = c.law.tangent(d, dd, vc);
+            (c.law.force(d, dd, vc), kd, kv)
+        } else {
+            (0.0, 0.0, 0.0)
+        }
+    };
 
     for step in 0..nsteps {
         let t1 = (step + 1) as f64 * dt;
@@ -222,90 +236,142 @@ pub(crate) fn run(
         for i in 0..n {
             u_new[i] = u[i] + dt * v[i] + 0.5 * dt * dt * acc[i];
         }
-        let mut converged = false;
+        // Active-set iteration on the contact states: Newton solves the step with every
+        // contact's state (carrying force / not) frozen, so that the residual is smooth;
+        // then the states are checked against the law at the solution and the inconsistent
+        // ones flipped, until none is (a frozen set never makes Newton flip-flop across the
+        // kink of a clamped law). Starts from the states of the last step.
+        on.copy_from_slice(&active);
+        visited.clear();
+        let mut converged;
         let mut last_res = f64::NAN;
-        for it in 0..=MAX_NEWTON {
-            for i in 0..n {
-                a_new[i] = a0 * (u_new[i] - u[i] - dt * v[i]) - acc[i];
-                v_new[i] = v[i] + 0.5 * dt * (acc[i] + a_new[i]);
-            }
-            sys.internal(&u_new, &v_new, &mut f);
-            let mut scale: f64 = 1.0;
-            for i in 0..n {
-                let p = -sys.mass[i] * ag1;
-                let ma = sys.mass[i] * a_new[i];
-                res[i] = p - ma + f[i];
-                scale = scale.max(p.abs()).max(ma.abs()).max(f[i].abs());
-            }
-            for (ci, c) in sys.contacts.iter().enumerate() {
-                let (d, dd) = kin(&u_new, &v_new, ci);
-                let (fc, kd, kv) = c.law.state_force(d, dd, vc_trial[ci]);
-                f_new[ci] = fc;
-                alpha[ci] = kd + a1 * kv;
-                res[c.l] -= fc;
-                res[c.r] += fc;
-                scale = scale.max(fc.abs());
-            }
-            let rnorm = res.amax();
-            last_res = rnorm;
-            if !rnorm.is_finite() {
-                return Err(SolverError::NonFinite {
-                    time: t1,
-                    context: format!(
-                        "Newmark residual is not finite at step {step} (Δt = {dt:.3e} s)"
-                    ),
-                });
-            }
-            if rnorm <= 1e-10 * scale {
-                converged = true;
-                break;
-            }
-            if it == MAX_NEWTON {
-                break;
-            }
-            stats.newton_iterations += 1;
-            // du = (A + W D Wᵀ)⁻¹ R by Woodbury.
-            solve(&mut res, &mut tmp);
-            let act: Vec<usize> = (0..nc).filter(|&i| alpha[i] != 0.0).collect();
-            if !act.is_empty() {
-                let m = act.len();
-                let g = DMatrix::from_fn(m, m, |i, j| {
-                    (if i == j { 1.0 } else { 0.0 }) + alpha[act[i]] * wz[(act[i], act[j])]
-                });
-                let s = DVector::from_fn(m, |i, _| {
-                    let c = &sys.contacts[act[i]];
-                    alpha[act[i]] * (res[c.l] - res[c.r])
-                });
-                let x = g.lu().solve(&s).ok_or_else(|| SolverError::NewtonFailure {
-                    time: t1,
-                    iterations: it + 1,
-                    residual: rnorm,
-                    context: "singular contact update".into(),
-                })?;
-                for (k, &ci) in act.iter().enumerate() {
-                    res.axpy(-x[k], &z[ci], 1.0);
-                }
-            }
-            let mut dmax: f64 = 0.0;
-            let mut umax: f64 = 0.0;
-            for i in 0..n {
-                u_new[i] += res[i];
-                dmax = dmax.max(res[i].abs());
-                umax = umax.max(u_new[i].abs());
-            }
-            if dmax <= 1e-13 * (1e-3 + umax) && it > 0 {
-                // Update at round-off level: accept after one more residual evaluation.
+        'sets: loop {
+            converged = false;
+            for it in 0..=MAX_NEWTON {
                 for i in 0..n {
                     a_new[i] = a0 * (u_new[i] - u[i] - dt * v[i]) - acc[i];
                     v_new[i] = v[i] + 0.5 * dt * (acc[i] + a_new[i]);
                 }
+                sys.internal(&u_new, &v_new, &mut f);
+                let mut scale: f64 = 1.0;
+                for i in 0..n {
+                    let p = -sys.mass[i] * ag1;
+                    let ma = sys.mass[i] * a_new[i];
+                    res[i] = p - ma + f[i];
+                    scale = scale.max(p.abs()).max(ma.abs()).max(f[i].abs());
+                }
                 for (ci, c) in sys.contacts.iter().enumerate() {
                     let (d, dd) = kin(&u_new, &v_new, ci);
-                    f_new[ci] = c.law.state_force(d, dd, vc_trial[ci]).0;
+                    let (fc, kd, kv) = frozen(c, on[ci], d, dd, vc_trial[ci]);
+                    f_new[ci] = fc;
+                    alpha[ci] = kd + a1 * kv;
+                    res[c.l] -= fc;
+                    res[c.r] += fc;
+                    scale = scale.max(fc.abs());
                 }
-                converged = true;
-                break;
+                let rnorm = res.amax();
+                last_res = rnorm;
+                if !rnorm.is_finite() {
+                    return Err(SolverError::NonFinite {
+                        time: t1,
+                        context: format!(
+                            "Newmark residual is not finite at step {step} (Δt = {dt:.3e} s)"
+                        ),
+                    });
+                }
+                if rnorm <= 1e-10 * scale {
+                    converged = true;
+                    break;
+                }
+                if it == MAX_NEWTON {
+                    break;
+                }
+                stats.newton_iterations += 1;
+                // du = (A + W D Wᵀ)⁻¹ R by Woodbury.
+                solve(&mut res, &mut tmp);
+                let act: Vec<usize> = (0..nc).filter(|&i| alpha[i] != 0.0).collect();
+                if !act.is_empty() {
+                    let m = act.len();
+                    let g = DMatrix::from_fn(m, m, |i, j| {
+                        (if i == j { 1.0 } else { 0.0 }) + alpha[act[i]] * wz[(act[i], act[j])]
+                    });
+                    let s = DVector::from_fn(m, |i, _| {
+                        let c = &sys.contacts[act[i]];
+                        alpha[act[i]] * (res[c.l] - res[c.r])
+                    });
+                    let x = g.lu().solve(&s).ok_or_else(|| SolverError::NewtonFailure {
+                        time: t1,
+                        iterations: it + 1,
+                        residual: rnorm,
+                        context: "singular contact update".into(),
+                    })?;
+                    for (k, &ci) in act.iter().enumerate() {
+                        res.axpy(-x[k], &z[ci], 1.0);
+                    }
+                }
+                let mut dmax: f64 = 0.0;
+                let mut umax: f64 = 0.0;
+                for i in 0..n {
+                    u_new[i] += res[i];
+                    dmax = dmax.max(res[i].abs());
+                    umax = umax.max(u_new[i].abs());
+                }
+                if dmax <= 1e-13 * (1e-3 + umax) && it > 0 {
+                    // Update at round-off level: accept after one more residual evaluation.
+                    for i in 0..n {
+                        a_new[i] = a0 * (u_new[i] - u[i] - dt * v[i]) - acc[i];
+                        v_new[i] = v[i] + 0.5 * dt * (acc[i] + a_new[i]);
+                    }
+                    for (ci, c) in sys.contacts.iter().enumerate() {
+                        let (d, dd) = kin(&u_new, &v_new, ci);
+                        f_new[ci] = frozen(c, on[ci], d, dd, vc_trial[ci]).0;
+                    }
+                    converged = true;
+                    break;
+                }
             }
+            if !converged {
+                break 'sets;
+            }
+            // A contact that carries force stays closed while its force is compressive
+            // (with tension allowed: while δ > 0); an open one closes when the law, judged
+            // from the state (δ > 0 and a compressive force), says so. The hysteresis settles
+            // a closure inside the step: there the dashpot force c δ̇ jumps at δ = 0 and no
+            // end-of-step state is consistent with both sets; the step then ends closed with
+            // δ a hair below zero, the usual O(Δt) closure instant of a fixed-step method.
+            let mut flipped = false;
+            for (ci, c) in sys.contacts.iter().enumerate() {
+                let (d, dd) = kin(&u_new, &v_new, ci);
+                let carries = if on[ci] {
+                    if c.law.kind == structure::scene::ContactLaw::KelvinVoigt && c.law.tension {
+                        d > 0.0
+                    } else {
+                        f_new[ci] > 0.0
+                    }
+                } else {
+                    c.law.state_force(d, dd, vc_trial[ci]).0 != 0.0
+                };
+                if carries != on[ci] {
+                    on[ci] = carries;
+                    flipped = true;
+                }
+            }
+            if !flipped {
+                break 'sets;
+            }
+            stats.active_set_iterations += 1;
+            if visited.contains(&on) || visited.len() >= MAX_SET_PASSES {
+                return Err(SolverError::NewtonFailure {
+                    time: t1,
+                    iterations: visited.len() + 1,
+                    residual: last_res,
+                    context: format!(
+                        "Newmark step {step}, Δt = {dt:.3e} s: the contact states do not settle \
+                     (active-set iteration cycles); contact forces {f_new:?} N"
+                    ),
+                });
+            }
+            visited.push(on.clone());
         }
         if !converged {
             return Err(SolverError::NewtonFailure {
