@@ -46,6 +46,9 @@ pub struct Locator<'a> {
     pub hi: f64,
     /// Root tolerance in s (absolute): ~2ε·t.
     pub tol: f64,
+    /// The event is δ = `shift` (m) instead of δ = 0 (a contact not yet re-armed after it
+    /// was resolved: see `Stepper`).
+    pub shift: f64,
     pub iterations: u64,
 }
 
@@ -57,7 +60,7 @@ impl Locator<'_> {
                 d += g * a.xv(s).0;
             }
         }
-        d - self.contact.gap
+        d - self.contact.gap - self.shift
     }
 
     fn ddelta(&self, s: f64) -> f64 {

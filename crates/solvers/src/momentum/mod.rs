@@ -32,12 +32,24 @@
 //! [`Diagnostics::corrections`] and in the `settings` string); so the method never loops
 //! and never tunnels.
 //!
-//! **Chattering** ([`persistent`]): when an impact's approach speed is below
-//! `capture_velocity`, or (c_r < 1) the impact intervals on a contact shrink geometrically
-//! with a remaining accumulation time below one sub-step, and `persistent_contact` is on,
-//! a plastic impulse (v⁺ = 0) starts a persistent-contact phase: the floors move together
-//! until the holding force would turn tensile. With `persistent_contact = false` the
-//! impact-rate guard ends such a run with [`SolverError::EventStorm`].
+//! **Impacts and touching contacts**: only a contact whose floors approach faster than
+//! `capture_velocity` is an impact. One found closed while separating is ignored; one
+//! touching (|δ̇| ≤ `capture_velocity`) joins a persistent-contact phase if holding it needs
+//! a compressive force and grazes otherwise (its tiny approach speed is removed). A contact
+//! just resolved is re-armed only once its gap has left a round-off band of 1e-9·max(gap,
+//! 1 mm) m, so a touching pair is never found closing again and again at one state.
+//!
+//! **Chattering** ([`persistent`]): when (c_r < 1) the impact intervals on a contact shrink
+//! geometrically with a remaining accumulation time below one sub-step, and
+//! `persistent_contact` is on, a plastic impulse (v⁺ = 0) starts a persistent-contact phase:
+//! the floors move together. The phase ends where the instantaneous holding force turns
+//! tensile, located by Brent's method (see [`persistent`]). With `persistent_contact =
+//! false` the run stops with [`SolverError::EventStorm`] (impact-rate guard) or, at the
+//! accumulation point, [`SolverError::Stalled`].
+//!
+//! **Refused scenes**: before anything is allocated, a scene whose shortest kept period
+//! needs more than [`stepper::MAX_SUB`] check windows per record step, or whose duration
+//! needs more than `analysis.max_steps` steps, is refused ([`SolverError::Refused`]).
 //!
 //! **Energy** ([`energy`]): input, damping, impact losses, final, balance error.
 //!
@@ -46,7 +58,8 @@
 //! - `momentum.impulse` — `consistent` (default) | `paper`;
 //! - `momentum.persistent_contact` — bool, default true;
 //! - `momentum.capture_velocity` — m/s, default 1e-4;
-//! - `analysis.max_impact_rate` — impacts/s over a 0.05 s sliding window, default 2000;
+//! - `analysis.max_impact_rate` — impacts/s over a 0.05 s sliding window, default 2000
+//!   (the same guard for every solver: [`crate::rules::ImpactRateGuard`]);
 //! - `analysis.max_steps` — propagation segments, default 5e7;
 //! - contacts: `gap` (m), `restitution` (dimensionless, default 1).
 

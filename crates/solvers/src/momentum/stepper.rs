@@ -242,9 +242,13 @@ pub struct Stepper<'a> {
     pub diag: Diagnostics,
     guard: ImpactRateGuard,
     last_impacts: Vec<VecDeque<f64>>,
-    /// Per contact: the instant it was last released or found touching without an impact
-    /// (NaN if never). A closure located at exactly that instant is not a new event.
-    released_at: Vec<f64>,
+    /// Per contact: just resolved (impact, release, graze) and not yet re-armed. Such a
+    /// contact's closure is detected at δ = `pen` instead of 0, until its gap has opened
+    /// beyond −`pen`: a contact left touching at rest is not found closing again and again
+    /// at the same state by round-off.
+    grazing: Vec<bool>,
+    /// Round-off band of each gap, m: 1e-9 · max(gap, 1 mm).
+    pen: Vec<f64>,
     xn: Vec<f64>,
     vn: Vec<f64>,
     disp_max: Vec<Vec<f64>>,
@@ -298,7 +302,8 @@ impl<'a> Stepper<'a> {
             },
             guard: ImpactRateGuard::new(p.limits.max_impact_rate),
             last_impacts: vec![VecDeque::new(); p.contacts.len()],
-            released_at: vec![f64::NAN; p.contacts.len()],
+            grazing: vec![false; p.contacts.len()],
+            pen: p.contacts.iter().map(|c| 1e-9 * c.gap.max(1e-3)).collect(),
             xn: vec![0.0; nm],
             vn: vec![0.0; nm],
             win_acc: vec![0.0; nm],
@@ -574,6 +579,7 @@ impl<'a> Stepper<'a> {
                         lo: h * (w - 1) as f64 / sub as f64,
                         hi: h * w as f64 / sub as f64,
                         tol: 0.0,
+                        shift: 0.0,
                         iterations: 0,
                     };
                     if !loc.surely_open(prev.0, prev.1, cur.0, cur.1) {
@@ -656,28 +662,15 @@ impl<'a> Stepper<'a> {
                 }
                 (d, dd)
             };
-            // A contact released (or left grazing) at this very instant touches at rest with
-            // a holding force that is not compressive: a root at s ≈ 0 would be round-off.
-            // Its search starts a hair later, at s₀ = 1e-6 of the first window (δ changes
-            // by O(δ̈ s₀²) meanwhile, far below any gap of interest).
-            let skip = if self.released_at[ci] == self.s.t {
-                1e-6 * tau / m as f64
-            } else {
-                0.0
-            };
-            let mut prev = if skip > 0.0 {
-                at(skip, &self.arcs)
-            } else {
-                (ct.delta(&self.s.x), ct.dot(&self.s.v))
-            };
+            if self.grazing[ci] && ct.delta(&self.s.x) < -self.pen[ci] {
+                self.grazing[ci] = false;
+            }
+            let shift = if self.grazing[ci] { self.pen[ci] } else { 0.0 };
+            let mut prev = (ct.delta(&self.s.x) - shift, ct.dot(&self.s.v));
             let mut r = None;
             for w in 1..=m {
                 let (lo, hi) = (
-                    if w == 1 {
-                        skip
-                    } else {
-                        tau * (w - 1) as f64 / m as f64
-                    },
+                    tau * (w - 1) as f64 / m as f64,
                     if w == m {
                         tau
                     } else {
@@ -685,9 +678,10 @@ impl<'a> Stepper<'a> {
                     },
                 );
                 let cur = if w == m {
-                    (ct.delta(&self.xn), ct.dot(&self.vn))
+                    (ct.delta(&self.xn) - shift, ct.dot(&self.vn))
                 } else {
-                    at(hi, &self.arcs)
+                    let (d, dd) = at(hi, &self.arcs);
+                    (d - shift, dd)
                 };
                 let mut loc = Locator {
                     contact: ct,
@@ -696,6 +690,7 @@ impl<'a> Stepper<'a> {
                     lo,
                     hi,
                     tol,
+                    shift,
                     iterations: 0,
                 };
                 r = loc.locate(prev.0, prev.1, cur.0, cur.1);
@@ -883,7 +878,7 @@ impl<'a> Stepper<'a> {
                 });
             }
         }
-        self.released_at[contact] = t;
+        self.grazing[contact] = true;
         self.stats.events += 1;
         Step::Released { contact, time: t }
     }
@@ -945,24 +940,28 @@ impl<'a> Stepper<'a> {
     /// Resolves the contacts found closing now (see [`super::impulse`]).
     ///
     /// Only an *approaching* contact is an impact. A contact found closed while its floors
-    /// separate or are at rest (δ̇ ≤ 0) is not: nothing happens. With persistent contact on,
-    /// a contact touching with an approach speed at most `capture_velocity` is not an impact
-    /// either: it joins the held set if holding it needs a compressive force, and is left to
-    /// graze otherwise. Only impacts feed the impact-rate guard.
+    /// separate (δ̇ < −`capture_velocity`) is not: nothing happens. A contact touching
+    /// (|δ̇| ≤ `capture_velocity`) is not an impact either: it joins the held set if holding
+    /// it needs a compressive force, and is left to graze otherwise (with persistent contact
+    /// off, a touching contact under compression is the accumulation point of chattering:
+    /// [`SolverError::Stalled`]; one still approaching, 0 < δ̇ ≤ `capture_velocity`, is an
+    /// impact as any other). Only impacts feed the impact-rate guard.
     pub fn impact(&mut self, closing: &[usize]) -> Result<(), SolverError> {
         let p = self.p;
         let t = self.s.t;
         self.stats.events += 1;
         let mut contacts = Vec::with_capacity(closing.len());
         let mut touching = Vec::new();
+        let cap = p.options.capture_velocity;
         for &c in closing {
             let v = p.contacts[c].dot(&self.s.v);
-            if v <= 0.0 {
-                self.released_at[c] = t;
-            } else if p.options.persistent_contact && v <= p.options.capture_velocity {
-                touching.push(c);
-            } else {
+            if v < -cap {
+                // Separating: not an impact (a round-off closure while the floors part).
+                self.grazing[c] = true;
+            } else if v > cap || (v > 0.0 && !p.options.persistent_contact) {
                 contacts.push(c);
+            } else {
+                touching.push(c);
             }
         }
         if !touching.is_empty() {
@@ -972,15 +971,35 @@ impl<'a> Stepper<'a> {
             let a_g = p.ground(self.s.j, t);
             let (lam, tol) = self.holding_forces(&set, &self.s.x, &self.s.v, a_g, t)?;
             let mut join = held;
+            let mut graze = Vec::new();
+            // Joins unless the force it would need is tensile beyond round-off (a force
+            // within ±tol is held: harmless, and the release is then located when it turns
+            // tensile, instead of grazing again and again at the same state).
             for (k, &c) in set.iter().enumerate().skip(join.len()) {
-                if lam[k] > tol[k] {
+                if lam[k] >= -tol[k] && !p.options.persistent_contact {
+                    return Err(SolverError::Stalled {
+                        time: t,
+                        reason: format!(
+                            "contact {c} touches at rest under a compressive force (the \
+                             accumulation point of chattering impacts, c_r = {}); without \
+                             persistent contact (momentum.persistent_contact = false) the \
+                             method cannot go on",
+                            p.contacts[c].restitution
+                        ),
+                    });
+                }
+                if lam[k] >= -tol[k] {
                     join.push(c);
                     self.s.persistent.push((c, t));
                     self.last_impacts[c].clear();
                 } else {
-                    self.released_at[c] = t;
+                    graze.push(c);
                 }
+                self.grazing[c] = true;
             }
+            // Held contacts and grazing ones lose their (at most capture_velocity) approach
+            // speed: a plastic micro-impulse, so that a grazing pair separates (δ̈ < 0).
+            join.extend(&graze);
             if !join.is_empty() {
                 self.project_held(&join)?;
             }
@@ -1119,6 +1138,7 @@ impl<'a> Stepper<'a> {
                 max_penetration: None,
             });
             self.stats.impacts += 1;
+            self.grazing[c] = true;
             if captured[k] && !self.s.persistent.iter().any(|&(x, _)| x == c) {
                 self.s.persistent.push((c, t));
                 self.last_impacts[c].clear();
@@ -1178,7 +1198,7 @@ pub(crate) fn restitution(v_before: f64, v_after: f64, undefined: Option<&str>) 
         return f64::NAN;
     }
     let r = -v_after / v_before;
-    if (-1e-12..0.0).contains(&r) {
+    if (-1e-12..=0.0).contains(&r) {
         0.0
     } else if r > 1.0 && r <= 1.0 + 1e-12 {
         1.0
