@@ -103,6 +103,10 @@ pub struct Stats {
     /// Newmark: extra Newton solves because a contact's state (carrying force or not)
     /// assumed for the step was inconsistent with the law at its solution (active set).
     pub active_set_iterations: u64,
+    /// Newmark: steps in which no contact-state set was consistent (a contact opens and
+    /// closes again inside the step); the contacts whose closed force was compressive were
+    /// kept closed and the step accepted, the state change falling to the next step.
+    pub contact_state_fallbacks: u64,
     /// Smallest and largest accepted step, s.
     pub min_step: f64,
     pub max_step: f64,
