@@ -644,6 +644,38 @@ fn validate(raw: RawScene, origin: &str, base_dir: &Path) -> Result<Scene, Scene
                 ),
             ));
         }
+        // The same floor pair twice (in either orientation) makes the contact system
+        // singular: refuse it here rather than fail inside a solver.
+        if let Some(other) = contacts.iter().position(|c: &Contact| {
+            (c.left, c.left_dof, c.right, c.right_dof) == (left, left_dof, right, right_dof)
+                || (c.left, c.left_dof, c.right, c.right_dof) == (right, right_dof, left, left_dof)
+        }) {
+            return Err(invalid(
+                format!("contacts[{ci}]"),
+                format!(
+                    "duplicate contact: floor {} of `{}` and floor {} of `{}` are already joined \
+                     by contacts[{other}]; one contact per floor pair",
+                    left_dof + 1,
+                    buildings[left].name,
+                    right_dof + 1,
+                    buildings[right].name
+                ),
+            ));
+        }
+        // Initial penetration: δ = u_left − u_right − gap must not exceed round-off at t = 0.
+        let delta0 = buildings[left].initial_displacement[left_dof]
+            - buildings[right].initial_displacement[right_dof]
+            - rc.gap;
+        if delta0 > 1e-9 * rc.gap.max(1e-3) {
+            return Err(invalid(
+                format!("contacts[{ci}]"),
+                format!(
+                    "the floors start penetrated by {delta0:.6e} m: initial displacements \
+                     (buildings.initial_displacement) close the gap of {} m at t = 0",
+                    rc.gap
+                ),
+            ));
+        }
         contacts.push(Contact {
             left,
             left_dof,

@@ -134,7 +134,7 @@ enum StudiesCommand {
         /// Run one part of the sweep: cases with index % n == i - 1.
         #[arg(long, value_name = "i/n")]
         shard: Option<String>,
-        /// Worker threads (default: one per core).
+        /// Worker threads, 1 … 1024 (default: one per core).
         #[arg(long)]
         threads: Option<usize>,
         /// Small grids, one record, 12 s of analysis (smoke tests).
@@ -187,6 +187,9 @@ enum MethodArg {
     Momentum,
     Gap,
 }
+
+/// Largest `--threads` accepted: beyond it, starting the threads alone takes minutes.
+const MAX_THREADS: usize = 1024;
 
 /// An error caused by the user's input (exit code 2).
 #[derive(Debug, thiserror::Error)]
@@ -369,6 +372,13 @@ fn studies_command(command: StudiesCommand) -> Result<()> {
             }
             if threads == Some(0) {
                 return Err(input("--threads 0: expected at least 1"));
+            }
+            if let Some(n) = threads.filter(|&n| n > MAX_THREADS) {
+                return Err(input(format!(
+                    "--threads {n}: expected at most {MAX_THREADS} (this machine has {} cores; \
+                     cases run one per thread, so more threads than cores only costs memory)",
+                    std::thread::available_parallelism().map_or(1, |n| n.get())
+                )));
             }
             let shard = match shard {
                 Some(s) => Some(s.parse::<studies::sweep::Shard>().map_err(input)?),

@@ -807,6 +807,98 @@ fn scene_duration() {
     );
 }
 
+/// Refused at load, exit 2, for every method: the same floor pair joined twice (either
+/// orientation), and floors that start penetrated.
+#[test]
+fn scene_duplicate_contacts_and_initial_penetration() {
+    let base = base_scene();
+    scene_case(
+        &format!("{base}{CONTACT}"),
+        &[],
+        &["contacts[1]", "duplicate contact", "contacts[0]"],
+    );
+    let flipped = CONTACT
+        .replace("left = \"a\"", "left = \"x\"")
+        .replace("right = \"b\"", "right = \"a\"")
+        .replace("left = \"x\"", "left = \"b\"");
+    scene_case(
+        &format!("{base}{flipped}"),
+        &[],
+        &["contacts[1]", "duplicate contact"],
+    );
+    scene_case(
+        &base,
+        &["buildings.0.initial_displacement=[0.0, 0.02]"],
+        &["contacts[0]", "penetrated by 1.000000e-2 m"],
+    );
+}
+
+/// Scenes that would exhaust memory or time are refused before anything is allocated,
+/// with exit 2 and the reason, and leave no output: durations whose step count exceeds
+/// `analysis.max_steps` (1e9 s aborted on allocation, 1e300 s panicked), and a wall-like
+/// story stiffness for the momentum method and the explicit gap integrator.
+#[test]
+fn hostile_scenes_are_refused_before_running() {
+    let d = TempDir::new("hostile");
+    d.write("rec.txt", RECORD);
+    let scene = d.write("scene.toml", &base_scene());
+    let (json, hist) = (d.path("out.json"), d.path("history.csv"));
+    for (method, sets, expect) in [
+        (
+            "momentum",
+            vec!["analysis.duration=1e9"],
+            "analysis.max_steps",
+        ),
+        (
+            "momentum",
+            vec!["analysis.duration=1e300"],
+            "analysis.max_steps",
+        ),
+        ("gap", vec!["analysis.duration=1e300"], "analysis.max_steps"),
+        (
+            "gap",
+            vec!["analysis.duration=1e9", "gap_element.integrator=adaptive"],
+            "analysis.max_steps",
+        ),
+        (
+            "momentum",
+            vec!["buildings.1.story_stiffness=[1e22, 1e22]"],
+            "momentum.modes",
+        ),
+        (
+            "gap",
+            vec![
+                "buildings.1.story_stiffness=[1e22, 1e22]",
+                "gap_element.integrator=adaptive",
+            ],
+            "newmark",
+        ),
+    ] {
+        let mut a = run_args(&scene, &json, &hist, &sets);
+        a[3] = method.into();
+        assert_bad(&a, &["cannot be run", expect], &[&json, &hist]);
+    }
+}
+
+#[test]
+fn threads_beyond_the_limit_are_refused() {
+    let d = TempDir::new("threads");
+    let out = d.path("results");
+    assert_bad(
+        &[
+            "studies".into(),
+            "run".into(),
+            "paper".into(),
+            "--threads".into(),
+            "100000".into(),
+            "--out".into(),
+            s(&out),
+        ],
+        &["--threads 100000", "at most 1024"],
+        &[&out],
+    );
+}
+
 #[test]
 fn scene_solver_options_out_of_range() {
     let base = base_scene();
