@@ -136,7 +136,7 @@ fn failing_cases_become_rows() {
     assert_eq!((s.ran, s.failed), (3, 2));
     let res = studies::sweep::collect("t", &specs, &out).unwrap();
     assert_eq!(res.get(&base).status, "ok");
-    assert_eq!(res.get(&storm).error_kind.as_deref(), Some("EventStorm"));
+    assert_eq!(res.get(&storm).error_kind.as_deref(), Some("Stalled"));
     assert_eq!(res.get(&bad).error_kind.as_deref(), Some("Scene"));
     assert!(res
         .get(&bad)
@@ -147,7 +147,7 @@ fn failing_cases_become_rows() {
     studies::sweep::write_cases_table(&out, &res).unwrap();
     let csv = std::fs::read_to_string(out.join("cases.csv")).unwrap();
     assert_eq!(csv.lines().count(), 4);
-    assert!(csv.contains("EventStorm"));
+    assert!(csv.contains("Stalled"));
 }
 
 #[test]
