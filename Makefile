@@ -1,13 +1,14 @@
 # pound: the two commands of the README, plus helpers.
 #   make studies   regenerate every table and figure in results/
 #   make test      run the whole test suite
+#   make robustness  the long robustness sweep over every record (results/robustness)
 # Nothing else is needed on a fresh machine than a Rust toolchain (cargo): plots use a font
 # committed in data/fonts, so no system font or fontconfig package is required.
 
 CARGO ?= cargo
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 
-.PHONY: all build test studies bench fmt clippy clean
+.PHONY: all build test studies robustness bench fmt clippy clean
 
 all: build
 
@@ -19,6 +20,10 @@ test:
 
 studies: build
 	./target/release/pound studies run --all --fresh --out results
+
+# The long robustness sweep (issue 9): 60 records x 4 gaps x 3 c_r x 3 solvers. Not in CI.
+robustness: build
+	./target/release/pound studies run robustness --fresh --out results
 
 bench:
 	$(CARGO) bench -p solvers

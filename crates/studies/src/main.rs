@@ -365,8 +365,9 @@ fn studies_command(command: StudiesCommand) -> Result<()> {
             for n in &names {
                 if st::study(n).is_none() {
                     return Err(input(format!(
-                        "unknown study `{n}` (studies: {})",
-                        st::NAMES.join(", ")
+                        "unknown study `{n}` (studies: {}; by name only: {})",
+                        st::NAMES.join(", "),
+                        st::EXTRA.join(", ")
                     )));
                 }
             }

@@ -247,6 +247,15 @@ pub struct CaseOutputs {
     /// Largest penetration (gap element), m.
     pub max_penetration: Option<f64>,
     pub persistent_contacts: usize,
+    /// Impacts (entries with a defined restitution) whose approach speed is ≤ 0.
+    #[serde(default)]
+    pub impacts_nonpositive_approach: usize,
+    /// Defined achieved restitutions outside [0, 1].
+    #[serde(default)]
+    pub restitution_outside_unit: usize,
+    /// Entries whose achieved restitution is null (with a reason: touching, grazing, …).
+    #[serde(default)]
+    pub restitution_undefined: usize,
     pub energy_input: f64,
     pub energy_contact: f64,
     pub energy_balance_error: f64,
@@ -408,6 +417,23 @@ pub fn run_case(spec: &CaseSpec, studies_dir: &Path) -> CaseResult {
         restitution_max: rmax,
         max_penetration: max_pen,
         persistent_contacts: run.persistent_contacts.len(),
+        impacts_nonpositive_approach: run
+            .impacts
+            .iter()
+            .filter(|i| i.achieved_restitution.is_finite() && i.relative_velocity_before <= 0.0)
+            .count(),
+        restitution_outside_unit: run
+            .impacts
+            .iter()
+            .filter(|i| {
+                i.achieved_restitution.is_finite() && !(0.0..=1.0).contains(&i.achieved_restitution)
+            })
+            .count(),
+        restitution_undefined: run
+            .impacts
+            .iter()
+            .filter(|i| i.achieved_restitution.is_nan())
+            .count(),
         energy_input: run.energy.input,
         energy_contact: run.energy.contact,
         energy_balance_error: run.energy.balance_error,

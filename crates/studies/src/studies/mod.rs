@@ -14,6 +14,7 @@ pub mod gap;
 pub mod modes;
 pub mod paper;
 pub mod restitution;
+pub mod robustness;
 pub mod stability;
 pub mod stiffness;
 
@@ -29,6 +30,9 @@ use crate::sweep::{
     Results, RunSummary, Shard, StudyError,
 };
 use crate::table::Table;
+
+/// Studies run only by name (long sweeps, not part of `--all` / `make studies`).
+pub const EXTRA: [&str; 1] = ["robustness"];
 
 /// All studies, in the order `--all` runs them.
 pub const NAMES: [&str; 7] = [
@@ -125,6 +129,7 @@ pub fn study(name: &str) -> Option<&'static dyn Study> {
         "gap" => &gap::Gap,
         "cost" => &cost::Cost,
         "stability" => &stability::Stability,
+        "robustness" => &robustness::Robustness,
         _ => return None,
     })
 }
@@ -206,8 +211,9 @@ pub fn run_study(name: &str, cfg: &RunConfig) -> Result<StudyRun> {
     let t0 = Instant::now();
     let st = study(name).ok_or_else(|| {
         StudyError::Other(format!(
-            "unknown study `{name}` (studies: {})",
-            NAMES.join(", ")
+            "unknown study `{name}` (studies: {}, {})",
+            NAMES.join(", "),
+            EXTRA.join(", ")
         ))
     })?;
     let (text, file) = read_definition(cfg, name)?;
@@ -256,7 +262,7 @@ fn report(st: &dyn Study, ctx: &Ctx, specs: &[CaseSpec]) -> Result<()> {
 /// lists the missing ids) and the reports are written. Returns the studies merged.
 pub fn merge(dirs: &[PathBuf], out: &Path, studies_dir: &Path) -> Result<Vec<String>> {
     let mut merged = Vec::new();
-    for name in NAMES {
+    for &name in NAMES.iter().chain(&EXTRA) {
         let manifests: Vec<PathBuf> = dirs
             .iter()
             .map(|d| d.join(name).join("manifest.json"))
@@ -411,10 +417,8 @@ pub fn write_summary(
     s = s.trim_end().to_string();
     s.push_str("\n\n");
     for (stem, caption) in figures {
-        s.push_str(&format!(
-            "![{caption}](results/{}/{stem}.png)\n\n*{caption}*\n\n",
-            ctx.name
-        ));
+        // Relative to the summary's own folder, so the links work wherever `--out` is.
+        s.push_str(&format!("![{caption}]({stem}.png)\n\n*{caption}*\n\n"));
     }
     for t in tables {
         s.push_str(&t.markdown());

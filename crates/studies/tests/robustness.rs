@@ -1,0 +1,98 @@
+//! The robustness sweep (`pound studies run robustness`, `make robustness`) in its quick
+//! form: it runs, is not part of `--all`, and its counts agree with the case files.
+
+mod common;
+use common::{pound, TempDir};
+
+fn read_csv(path: &std::path::Path) -> Vec<Vec<String>> {
+    let mut r = csv::Reader::from_path(path).unwrap();
+    let mut rows = vec![r.headers().unwrap().iter().map(String::from).collect()];
+    for rec in r.records() {
+        rows.push(rec.unwrap().iter().map(String::from).collect());
+    }
+    rows
+}
+
+#[test]
+fn quick_robustness_sweep_counts_agree_with_the_cases() {
+    let d = TempDir::new("robustness");
+    let out = d.path("results");
+    let studies = concat!(env!("CARGO_MANIFEST_DIR"), "/../../studies");
+    let o = pound(&[
+        "studies",
+        "run",
+        "robustness",
+        "--quick",
+        "--studies-dir",
+        studies,
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let dir = out.join("robustness");
+    for f in [
+        "robustness.csv",
+        "robustness.md",
+        "summary.md",
+        "cases.json",
+    ] {
+        assert!(dir.join(f).is_file(), "{f} missing");
+    }
+    let rows = read_csv(&dir.join("robustness.csv"));
+    let h = &rows[0];
+    let col = |name: &str| h.iter().position(|x| x == name).unwrap();
+    // Quick: 3 records × 1 gap × 2 c_r × 3 methods, in 6 rows of 3 runs.
+    assert_eq!(rows.len() - 1, 6);
+    let runs: usize = rows[1..]
+        .iter()
+        .map(|r| r[col("runs")].parse::<usize>().unwrap())
+        .sum();
+    assert_eq!(runs, 18);
+    let sum = |c: &str| -> usize {
+        rows[1..]
+            .iter()
+            .map(|r| r[col(c)].parse::<usize>().unwrap())
+            .sum()
+    };
+
+    // The same counts from the case files (baselines excluded).
+    let cases: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("cases.json")).unwrap()).unwrap();
+    let cases: Vec<&serde_json::Value> = cases
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|c| c["spec"]["params"].get("baseline").is_none())
+        .collect();
+    assert_eq!(cases.len(), 18);
+    let failed = cases.iter().filter(|c| c["status"] != "ok").count();
+    assert_eq!(sum("failed"), failed);
+    let total = |k: &str| -> usize {
+        cases
+            .iter()
+            .filter_map(|c| c["outputs"][k].as_u64())
+            .sum::<u64>() as usize
+    };
+    assert_eq!(sum("impacts"), total("impacts"));
+    assert_eq!(sum("restitution_null"), total("restitution_undefined"));
+    assert_eq!(
+        sum("restitution_outside_unit"),
+        total("restitution_outside_unit")
+    );
+    assert_eq!(
+        sum("impacts_nonpositive_approach"),
+        total("impacts_nonpositive_approach")
+    );
+    // Failures listed one per failed run.
+    let listed = if dir.join("failures.csv").is_file() {
+        read_csv(&dir.join("failures.csv")).len() - 1
+    } else {
+        0
+    };
+    assert_eq!(listed, failed);
+
+    // Not part of --all.
+    let o = pound(&["studies", "run", "nope"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("by name only: robustness"), "{err}");
+}
