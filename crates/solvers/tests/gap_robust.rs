@@ -12,8 +12,15 @@ fn paper(overrides: &[&str]) -> Scene {
     Scene::from_file_with_overrides(&paper_scene_path(), &o).expect("paper scene")
 }
 
-fn near_field(rec: &str) -> String {
-    format!("ground_motion.file=../../data/ground-motions/near-field/{rec}.AT2")
+/// The paper scene with `base` overrides on near-field record `rec`, gap (m) and c_r.
+fn near_field(base: &[&str], rec: &str, gap: &str, cr: &str) -> Scene {
+    let mut o: Vec<String> = base.iter().map(|s| s.to_string()).collect();
+    o.push(format!(
+        "ground_motion.file=../../data/ground-motions/near-field/{rec}.AT2"
+    ));
+    o.push(format!("contacts.0.gap={gap}"));
+    o.push(format!("contacts.0.restitution={cr}"));
+    Scene::from_file_with_overrides(&paper_scene_path(), &o).expect("paper scene")
 }
 
 /// Every restitution is in [0, 1] or null with a reason; the balance closes.
@@ -49,14 +56,8 @@ fn newmark_settles_the_clamped_dashpot_at_1_ms() {
         ("RSN1004_NORTHR-0637_122", "0.01", "0.3"),
         ("RSN1048_NORTHR-STC_122", "0.05", "0.3"),
     ] {
-        let mut o = NEWMARK_KV.to_vec();
-        let (f, g, c) = (
-            near_field(rec),
-            format!("contacts.0.gap={gap}"),
-            format!("contacts.0.restitution={cr}"),
-        );
-        o.extend([f.as_str(), g.as_str(), c.as_str()]);
-        let out = solve(&paper(&o), None).unwrap_or_else(|e| panic!("{rec}: {e}"));
+        let s = near_field(&NEWMARK_KV, rec, gap, cr);
+        let out = solve(&s, None).unwrap_or_else(|e| panic!("{rec}: {e}"));
         assert!(
             out.stats.active_set_iterations > 0,
             "{rec}: {:?}",
@@ -94,14 +95,8 @@ fn gap_restitution_is_in_the_unit_interval_or_null_with_a_reason() {
             ("RSN1165_KOCAELI-IZT_270", "0.01"),
         ] {
             for cr in ["0.65", "0.3"] {
-                let mut o = integ.to_vec();
-                let (f, g, c) = (
-                    near_field(rec),
-                    format!("contacts.0.gap={gap}"),
-                    format!("contacts.0.restitution={cr}"),
-                );
-                o.extend([f.as_str(), g.as_str(), c.as_str()]);
-                let out = solve(&paper(&o), None).unwrap_or_else(|e| panic!("{rec}: {e}"));
+                let s = near_field(integ, rec, gap, cr);
+                let out = solve(&s, None).unwrap_or_else(|e| panic!("{rec}: {e}"));
                 assert_sound(&out, 1e-7);
             }
         }
