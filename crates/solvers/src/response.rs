@@ -49,6 +49,15 @@ impl ResponseTracker {
     /// Records the floor displacements `u` (m) of building `b` at one instant.
     #[inline]
     pub fn observe(&mut self, b: usize, u: &[f64]) {
+        self.observe_peaks(b, u);
+        let off = self.offsets[b];
+        self.row[off..off + u.len()].copy_from_slice(u);
+    }
+
+    /// Updates the peaks of building `b` with the floor displacements `u` (m) at an instant
+    /// that is not a history sample (an interior extremum found between samples).
+    #[inline]
+    pub fn observe_peaks(&mut self, b: usize, u: &[f64]) {
         let k = &self.stiffness[b];
         let vmax = &mut self.shear_max[b];
         let dmax = &mut self.disp_max[b];
@@ -64,8 +73,13 @@ impl ResponseTracker {
             }
             below = u[j];
         }
-        let off = self.offsets[b];
-        self.row[off..off + u.len()].copy_from_slice(u);
+    }
+
+    /// Current peak story shear (N) of story `j` and floor displacement (m) of floor `j` of
+    /// building `b`.
+    #[inline]
+    pub fn peak(&self, b: usize, j: usize) -> (f64, f64) {
+        (self.shear_max[b][j], self.disp_max[b][j])
     }
 
     /// Stores the floor displacements `u` of building `b` for the history row only, without
@@ -98,5 +112,54 @@ impl ResponseTracker {
                 },
             )
             .collect()
+    }
+}
+
+/// Position θ ∈ (0, 1) and value of the interior extremum of the cubic Hermite interpolant
+/// of (y0, ẏ0) and (y1, ẏ1) over an interval of length `len`, if ẏ changes sign: the
+/// detector of peaks between samples (both event-driven solvers).
+pub fn hermite_extremum(y0: f64, yd0: f64, y1: f64, yd1: f64, len: f64) -> Option<(f64, f64)> {
+    if !(yd0 * yd1 < 0.0) || !(len > 0.0) {
+        return None;
+    }
+    let (m0, m1) = (yd0 * len, yd1 * len);
+    // H(θ) = y0 + c1 θ + c2 θ² + c3 θ³; H'(θ) = c1 + 2 c2 θ + 3 c3 θ² changes sign on
+    // [0, 1] (H'(0) = m0, H'(1) = m1), so it has exactly one root there: bisection.
+    let c1 = m0;
+    let c2 = -3.0 * y0 - 2.0 * m0 + 3.0 * y1 - m1;
+    let c3 = 2.0 * y0 + m0 - 2.0 * y1 + m1;
+    let f = |t: f64| c1 + t * (2.0 * c2 + t * 3.0 * c3);
+    let theta = bisect(f, 0.0, 1.0);
+    Some((theta, y0 + theta * (c1 + theta * (c2 + theta * c3))))
+}
+
+/// The sign change of `f` in [lo, hi] (f(lo) f(hi) ≤ 0 assumed) by 60 bisections.
+pub fn bisect(f: impl Fn(f64) -> f64, mut lo: f64, mut hi: f64) -> f64 {
+    let flo = f(lo);
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if f(mid) * flo > 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hermite_extremum_of_a_parabola_is_exact() {
+        // y = 1 − (t − 0.3)² on [0, 1]: ẏ = −2(t − 0.3).
+        let y = |t: f64| 1.0 - (t - 0.3) * (t - 0.3);
+        let (th, h) = hermite_extremum(y(0.0), 0.6, y(1.0), -1.4, 1.0).unwrap();
+        assert!(
+            (th - 0.3).abs() < 1e-14 && (h - 1.0).abs() < 1e-14,
+            "{th} {h}"
+        );
+        assert!(hermite_extremum(0.0, 1.0, 1.0, 1.0, 1.0).is_none());
     }
 }

@@ -67,6 +67,7 @@ pub mod energy;
 pub mod events;
 pub mod impulse;
 pub mod modal;
+pub mod peaks;
 pub mod persistent;
 pub mod stepper;
 

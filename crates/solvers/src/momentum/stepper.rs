@@ -9,6 +9,7 @@ use super::energy::EnergyAccount;
 use super::events::Locator;
 use super::impulse::{self, ContactGeom};
 use super::modal::{Arc, Modal, StepCoeffs};
+use super::peaks;
 use super::persistent;
 use crate::response::ResponseTracker;
 use crate::rules::ImpactRateGuard;
@@ -261,6 +262,14 @@ pub struct Stepper<'a> {
     stiffness: Vec<Vec<f64>>,
     u: Vec<Vec<f64>>,
     arcs: Vec<Arc>,
+    /// Floor velocities at the current and at the previous sample, per building.
+    ud: Vec<Vec<f64>>,
+    u_prev: Vec<Vec<f64>>,
+    ud_prev: Vec<Vec<f64>>,
+    /// The interval integrated since the previous sample (continuous peaks, [`peaks`]).
+    interval: peaks::Interval,
+    /// Story-shear coefficients c_n = k_j (φ_n[j] − φ_n[j−1]) per building, story-major.
+    shear_rows: Vec<Vec<f64>>,
 }
 
 impl<'a> Stepper<'a> {
@@ -331,6 +340,43 @@ impl<'a> Stepper<'a> {
                 .map(|b| vec![0.0; b.n_floors])
                 .collect(),
             arcs: Vec::with_capacity(nm),
+            ud: p
+                .modal
+                .buildings
+                .iter()
+                .map(|b| vec![0.0; b.n_floors])
+                .collect(),
+            u_prev: p
+                .modal
+                .buildings
+                .iter()
+                .map(|b| vec![0.0; b.n_floors])
+                .collect(),
+            ud_prev: p
+                .modal
+                .buildings
+                .iter()
+                .map(|b| vec![0.0; b.n_floors])
+                .collect(),
+            interval: peaks::Interval::default(),
+            shear_rows: p
+                .modal
+                .buildings
+                .iter()
+                .zip(&scene.buildings)
+                .map(|(bm, bd)| {
+                    let (nf, nmb) = (bm.n_floors, bm.range.len());
+                    let mut rows = vec![0.0; nf * nmb];
+                    for j in 0..nf {
+                        for m in 0..nmb {
+                            let below = if j > 0 { bm.phi[m * nf + j - 1] } else { 0.0 };
+                            rows[j * nmb + m] =
+                                bd.story_stiffness[j] * (bm.phi[m * nf + j] - below);
+                        }
+                    }
+                    rows
+                })
+                .collect(),
         };
         st.energy.initial = p.modal.energy(&st.s.x, &st.s.v);
         for (c, ct) in p.contacts.iter().enumerate() {
@@ -347,12 +393,15 @@ impl<'a> Stepper<'a> {
     }
 
     /// Floor displacements of every building at the current instant: peaks (branch-free,
-    /// vectorisable) and, when a history is requested, the shared [`ResponseTracker`].
+    /// vectorisable), the continuous peaks of the interval since the previous sample
+    /// ([`peaks`]) and, when a history is requested, the shared [`ResponseTracker`].
     fn observe(&mut self) {
-        let x = &self.s.x;
+        let (x, v) = (&self.s.x, &self.s.v);
+        let len = self.interval.tau_done;
         for (b, bm) in self.p.modal.buildings.iter().enumerate() {
             let u = &mut self.u[b];
             bm.to_floors(x, u);
+            bm.to_floors(v, &mut self.ud[b]);
             let (dm, sm, k) = (
                 &mut self.disp_max[b],
                 &mut self.shear_max[b],
@@ -370,12 +419,77 @@ impl<'a> Stepper<'a> {
                 let vs = (k[i] * (u[i] - u[i - 1])).abs();
                 sm[i] = if vs > sm[i] { vs } else { sm[i] };
             }
+            if len > 0.0 {
+                let (up, udp, ud) = (&self.u_prev[b], &self.ud_prev[b], &self.ud[b]);
+                let nmb = bm.range.len();
+                for i in 0..nf {
+                    // Floor i: y = u_i.
+                    if let Some((th, h)) = peaks::hermite_extremum(up[i], udp[i], u[i], ud[i], len)
+                    {
+                        if h.abs() >= 0.95 * dm[i] {
+                            let c: Vec<f64> = (0..nmb).map(|m| bm.phi[m * nf + i]).collect();
+                            let y = peaks::refine(
+                                &self.p.modal,
+                                bm.range.clone(),
+                                &c,
+                                &self.interval,
+                                len,
+                                th * len,
+                            );
+                            dm[i] = dm[i].max(y.abs());
+                        }
+                    }
+                    // Story i: y = k_i (u_i − u_{i−1}).
+                    let (below, below_p, vb, vbp) = if i > 0 {
+                        (u[i - 1], up[i - 1], ud[i - 1], udp[i - 1])
+                    } else {
+                        (0.0, 0.0, 0.0, 0.0)
+                    };
+                    let (y0, yd0) = (k[i] * (up[i] - below_p), k[i] * (udp[i] - vbp));
+                    let (y1, yd1) = (k[i] * (u[i] - below), k[i] * (ud[i] - vb));
+                    if let Some((th, h)) = peaks::hermite_extremum(y0, yd0, y1, yd1, len) {
+                        if h.abs() >= 0.95 * sm[i] {
+                            let c = &self.shear_rows[b][i * nmb..(i + 1) * nmb];
+                            let y = peaks::refine(
+                                &self.p.modal,
+                                bm.range.clone(),
+                                c,
+                                &self.interval,
+                                len,
+                                th * len,
+                            );
+                            sm[i] = sm[i].max(y.abs());
+                        }
+                    }
+                }
+            }
+            self.u_prev[b].copy_from_slice(u);
+            self.ud_prev[b].copy_from_slice(&self.ud[b]);
             if self.history.is_some() {
                 self.tracker.observe(b, u);
             }
         }
         if self.history.is_some() {
             self.tracker.sample(self.s.t, self.history.as_deref_mut());
+        }
+    }
+
+    /// Records the interval about to be integrated from the current state (ground a0 → a1
+    /// over `tau`, held-contact loads `fc`), for the continuous peaks of the next sample.
+    fn begin_interval(&mut self, a0: f64, a1: f64, tau: f64, fc: Option<&[f64]>) {
+        let iv = &mut self.interval;
+        iv.x0.clone_from(&self.s.x);
+        iv.v0.clone_from(&self.s.v);
+        (iv.a0, iv.a1, iv.tau) = (a0, a1, tau);
+        iv.fc = fc.map(|f| f.to_vec());
+        iv.tau_done = 0.0;
+    }
+
+    /// The velocities changed without a sample (an impulse): the next interval's rates at its
+    /// start are the new ones.
+    fn refresh_rates(&mut self) {
+        for (b, bm) in self.p.modal.buildings.iter().enumerate() {
+            bm.to_floors(&self.s.v, &mut self.ud_prev[b]);
         }
     }
 
@@ -477,6 +591,7 @@ impl<'a> Stepper<'a> {
         let p = self.p;
         let (a0, a1) = (p.ag_start[j], p.ag_end[j]);
         let h = p.full.h;
+        self.begin_interval(a0, a1, h, None);
         {
             // Structure of arrays, all sliced to `nm` so that the loop has no bounds checks
             // and no cross-mode dependency (per-mode energy accumulators): it vectorises.
@@ -600,6 +715,7 @@ impl<'a> Stepper<'a> {
         }
         self.finish_grid(j, t_end);
         self.count_step(h)?;
+        self.interval.tau_done = h;
         self.observe();
         Ok(Some(Step::Reached))
     }
@@ -636,6 +752,7 @@ impl<'a> Stepper<'a> {
         let p = self.p;
         let j = self.s.j;
         let (a0, a1) = (p.ground(j, self.s.t), p.ground(j, t_end));
+        self.begin_interval(a0, a1, tau, fc);
         self.build_arcs(a0, a1, tau, fc);
         for n in 0..self.arcs.len() {
             let (x1, v1) = self.arcs[n].xv(tau);
@@ -752,6 +869,7 @@ impl<'a> Stepper<'a> {
             self.s.on_grid = false;
         }
         self.count_step(s_end)?;
+        self.interval.tau_done = s_end;
         self.observe();
         Ok(step)
     }
@@ -861,6 +979,7 @@ impl<'a> Stepper<'a> {
         let pairs: Vec<(usize, f64)> = set.iter().copied().zip(imp).collect();
         impulse::apply(&p.contacts, &pairs, &mut self.s.v);
         self.energy.contact += ke0 - self.kinetic();
+        self.refresh_rates();
         Ok(())
     }
 
@@ -1160,6 +1279,7 @@ impl<'a> Stepper<'a> {
                 context: "modal velocities after an impulse".into(),
             });
         }
+        self.refresh_rates();
         Ok(())
     }
 

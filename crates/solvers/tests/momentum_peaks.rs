@@ -1,0 +1,107 @@
+//! Continuous peaks of the momentum method (issue 10): the same piecewise-linear ground
+//! acceleration given on a 16× finer grid must not change any peak, since the method is
+//! exact between events and its peaks are continuous maxima, not samples.
+
+use solvers::momentum::solve;
+use structure::ground::GroundMotion;
+use structure::testing::paper_scene_path;
+use structure::Scene;
+
+fn paper(overrides: &[&str]) -> Scene {
+    let o: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+    Scene::from_file_with_overrides(&paper_scene_path(), &o).expect("paper scene")
+}
+
+/// The same piecewise-linear record on a grid `k` times finer.
+fn refined(g: &GroundMotion, k: usize) -> GroundMotion {
+    let mut accel = Vec::with_capacity((g.accel.len() - 1) * k + 1);
+    for w in g.accel.windows(2) {
+        for i in 0..k {
+            accel.push(w[0] + (w[1] - w[0]) * i as f64 / k as f64);
+        }
+    }
+    accel.push(*g.accel.last().unwrap());
+    GroundMotion {
+        name: format!("{} x{k}", g.name),
+        dt: g.dt / k as f64,
+        accel,
+    }
+}
+
+/// Largest relative difference of all peak story shears and floor displacements.
+fn peak_difference(a: &solvers::RunOutput, b: &solvers::RunOutput) -> f64 {
+    let mut worst: f64 = 0.0;
+    for (ba, bb) in a.buildings.iter().zip(&b.buildings) {
+        for (x, y) in ba.story_shear_max.iter().zip(&bb.story_shear_max).chain(
+            ba.floor_displacement_max
+                .iter()
+                .zip(&bb.floor_displacement_max),
+        ) {
+            worst = worst.max((x - y).abs() / y.abs().max(f64::MIN_POSITIVE));
+        }
+    }
+    worst
+}
+
+#[test]
+fn peaks_do_not_move_when_the_record_is_resampled_16_times_finer() {
+    for over in [
+        vec!["contacts.0.gap=0.10"],
+        vec!["contacts.0.gap=0.05"],
+        vec![
+            "ground_motion.file=../../data/ground-motions/near-field/RSN1048_NORTHR-STC_122.AT2",
+            "contacts.0.gap=0.03",
+        ],
+    ] {
+        let coarse = paper(&over);
+        let mut fine = coarse.clone();
+        fine.ground = Some(refined(coarse.ground.as_ref().unwrap(), 16));
+        let (a, b) = (solve(&coarse, None).unwrap(), solve(&fine, None).unwrap());
+        assert_eq!(a.impacts.len(), b.impacts.len(), "{over:?}");
+        let d = peak_difference(&a, &b);
+        eprintln!("{over:?}: {d:.2e}");
+        assert!(d < 1e-6, "{over:?}: peaks differ by {d:.2e}");
+    }
+}
+
+/// With c_r < 1 the persistent-contact phases hold the floors with a constant force over each
+/// record sub-step, so the answer depends on the grid; how much is measured here, not
+/// asserted to a tolerance (reported in the README).
+#[test]
+#[ignore = "measurement: cargo test --release -- --ignored --nocapture"]
+fn grid_dependence_with_persistent_contact() {
+    let coarse = paper(&["contacts.0.gap=0.05", "contacts.0.restitution=0.65"]);
+    let mut fine = coarse.clone();
+    fine.ground = Some(refined(coarse.ground.as_ref().unwrap(), 16));
+    let (a, b) = (solve(&coarse, None).unwrap(), solve(&fine, None).unwrap());
+    eprintln!(
+        "c_r = 0.65, 5 cm: impacts {} / {}, phases {} / {}, largest peak difference {:.2e}",
+        a.impacts.len(),
+        b.impacts.len(),
+        a.persistent_contacts.len(),
+        b.persistent_contacts.len(),
+        peak_difference(&a, &b)
+    );
+}
+
+/// The adaptive gap element takes its peaks from the dense output between steps: resampling
+/// the record 16× finer changes its step sequence, so its peaks agree to the integration
+/// tolerance (here 1e-10), not to round-off.
+#[test]
+fn gap_element_peaks_do_not_move_with_a_finer_record_beyond_its_tolerance() {
+    for gap in ["0.10", "0.05"] {
+        let coarse = paper(&[
+            &format!("contacts.0.gap={gap}"),
+            "gap_element.stiffness=1e10",
+            "gap_element.tolerance=1e-10",
+        ]);
+        let mut fine = coarse.clone();
+        fine.ground = Some(refined(coarse.ground.as_ref().unwrap(), 16));
+        let a = solvers::gap::solve(&coarse, None).unwrap();
+        let b = solvers::gap::solve(&fine, None).unwrap();
+        assert_eq!(a.impacts.len(), b.impacts.len());
+        let d = peak_difference(&a, &b);
+        eprintln!("gap element, {gap} m: {d:.2e}");
+        assert!(d < 1e-6, "gap {gap}: peaks differ by {d:.2e}");
+    }
+}
