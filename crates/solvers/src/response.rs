@@ -82,14 +82,6 @@ impl ResponseTracker {
         (self.shear_max[b][j], self.disp_max[b][j])
     }
 
-    /// Stores the floor displacements `u` of building `b` for the history row only, without
-    /// updating the peaks (instants that are not peak-sampling instants).
-    #[inline]
-    pub fn history_row(&mut self, b: usize, u: &[f64]) {
-        let off = self.offsets[b];
-        self.row[off..off + u.len()].copy_from_slice(u);
-    }
-
     /// After every building has been observed at time `t`, appends the sample to `history`.
     pub fn sample(&self, t: f64, history: Option<&mut History>) {
         if let Some(h) = history {

@@ -40,8 +40,7 @@
 //!   number of steps spans the duration), `NormDispIncr` test. Initial conditions through
 //!   `setNodeDisp`/`setNodeVel`, with the consistent initial acceleration set explicitly.
 //! - Outputs: tracked in Python as pound's Newmark does: floor displacements (`nodeDisp`),
-//!   story shears k_j (u_j − u_{j−1}) and their peaks at the record instants (every
-//!   `PEAK_STRIDE` steps), the last step and the steps where a contact changes; a contact
+//!   story shears k_j (u_j − u_{j−1}) and their peaks at every step, as pound's Newmark; a contact
 //!   episode starts at the first step whose contact element carries a force and ends at the
 //!   first step where it carries none (times, relative velocities, impulse, peak force and
 //!   penetration as in `pound run`).
@@ -202,7 +201,7 @@ pub fn opensees_script(scene: &Scene) -> Result<String, ExportError> {
         };
 
     let dt_req = scene.gap_element.time_step;
-    let nsteps = ((scene.duration / dt_req).ceil() as u64).max(1);
+    let nsteps = solvers::gap::newmark::steps_and_step(scene).0;
 
     let mut s = String::new();
     let name = &scene.name;
@@ -242,11 +241,10 @@ import openseespy.opensees as ops
 SCENE = {name_lit}
 G = {g}  # m/s^2
 DURATION = {duration}  # s
-N_STEPS = {nsteps}  # fixed Newmark steps: ceil(DURATION / gap_element.time_step)
+N_STEPS = {nsteps}  # fixed Newmark steps: DURATION in equal steps of at most gap_element.time_step
 DT = DURATION / N_STEPS  # s (gap_element.time_step = {dt_req})
-# Peaks are taken where pound takes them: every PEAK_STRIDE steps (the record instants when
-# the record step is a whole number of steps), at the last step and where a contact changes.
-PEAK_STRIDE = {peak_stride}
+# Peaks are taken where pound's Newmark takes them: at every step.
+PEAK_STRIDE = 1
 SETTINGS = {settings_lit}
 
 "#,
@@ -257,7 +255,6 @@ SETTINGS = {settings_lit}
         duration = num(scene.duration),
         nsteps = nsteps,
         dt_req = num(dt_req),
-        peak_stride = solvers::gap::newmark::step_and_peak_stride(scene).1,
         settings_lit = pystr(&format!(
             "{} k={} N/m, Newmark average acceleration dt={} s, Newton, modalDamping",
             match scene.gap_element.law {

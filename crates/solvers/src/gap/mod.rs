@@ -321,13 +321,6 @@ impl System {
         }
     }
 
-    /// Stores `u` for the history row only (no peak update).
-    pub fn history_row(&self, tracker: &mut crate::response::ResponseTracker, u: &[f64]) {
-        for (bi, b) in self.blocks.iter().enumerate() {
-            tracker.history_row(bi, &u[b.off..b.off + b.len]);
-        }
-    }
-
     /// Settings in words.
     pub fn settings(&self, scene: &Scene) -> String {
         let g = &scene.gap_element;

@@ -36,27 +36,12 @@ const MAX_NEWTON: usize = 50;
 /// Largest number of contact-state sets tried in one step (active-set iteration).
 const MAX_SET_PASSES: usize = 16;
 
-/// Peak-sampling stride of the fixed-step Newmark run: the number of steps per record
-/// interval when the record step `sample_dt` is a whole number of steps `dt`, else 1.
-pub(crate) fn peak_stride(sample_dt: f64, dt: f64) -> u64 {
-    let ratio = sample_dt / dt;
-    if ratio >= 1.0 && (ratio - ratio.round()).abs() < 1e-6 * ratio {
-        ratio.round() as u64
-    } else {
-        1
-    }
-}
-
-/// The Newmark step actually used for `scene` (s) and its peak-sampling stride (see
-/// [`peak_stride`]), for tools that reproduce the run elsewhere (the OpenSees export).
-pub fn step_and_peak_stride(scene: &Scene) -> (f64, u64) {
+/// The number of Newmark steps for `scene` and the step actually used (s): the duration in
+/// equal steps of at most `gap_element.time_step` ([`crate::rules::grid_steps`]), for tools
+/// that reproduce the run elsewhere (the OpenSees export).
+pub fn steps_and_step(scene: &Scene) -> (u64, f64) {
     let nsteps = crate::rules::grid_steps(scene.duration, scene.gap_element.time_step);
-    let dt = scene.duration / nsteps as f64;
-    let sample_dt = scene
-        .ground
-        .as_ref()
-        .map_or(super::FREE_VIBRATION_SAMPLE, |g| g.dt);
-    (dt, peak_stride(sample_dt, dt))
+    (nsteps, scene.duration / nsteps as f64)
 }
 
 pub(crate) fn run(
@@ -67,8 +52,7 @@ pub(crate) fn run(
     let n = sys.n;
     let nc = sys.contacts.len();
     let duration = scene.duration;
-    let nsteps = crate::rules::grid_steps(duration, scene.gap_element.time_step);
-    let dt = duration / nsteps as f64;
+    let (nsteps, dt) = steps_and_step(scene);
     if nsteps > scene.limits.max_steps {
         return Err(SolverError::StepBudget {
             time: 0.0,
@@ -208,7 +192,6 @@ pub(crate) fn run(
     let mut alpha = vec![0.0; nc];
     let mut vc_trial = vec![0.0; nc];
 
-    let stride = peak_stride(sys.sample_dt, dt);
     let mut on = vec![false; nc];
     let mut visited: Vec<Vec<bool>> = Vec::new();
     // Force of each contact in the last solve that held it closed (NaN if none this step).
@@ -226,7 +209,6 @@ pub(crate) fn run(
 
     for step in 0..nsteps {
         let t1 = (step + 1) as f64 * dt;
-        let mut contact_changed = false;
         let ag1 = sys.ground_at(t1);
         for ci in 0..nc {
             vc_trial[ci] = if active[ci] {
@@ -426,9 +408,6 @@ pub(crate) fn run(
                 ep.peak_force = ep.peak_force.max(f_new[ci]);
                 ep.max_pen = ep.max_pen.max(d1);
             }
-            if now != active[ci] {
-                contact_changed = true;
-            }
             if !now && active[ci] {
                 impacts.push(episodes[ci].impact(ci, t1, dd1, impulse[ci]));
                 stats.events += 1;
@@ -441,11 +420,9 @@ pub(crate) fn run(
         acc.copy_from_slice(&a_new);
         ag = ag1;
         stats.steps += 1;
-        if (step + 1) % stride == 0 || step + 1 == nsteps || contact_changed {
-            sys.observe(&mut tracker, &u);
-        } else {
-            sys.history_row(&mut tracker, &u);
-        }
+        // Peaks at every step, as a finite-element program reports them (not continuous
+        // maxima: between steps Newmark has no interpolant of its own accuracy).
+        sys.observe(&mut tracker, &u);
         tracker.sample(t1, history.as_deref_mut());
     }
 
