@@ -120,9 +120,32 @@ pub fn hermite_extremum(y0: f64, yd0: f64, y1: f64, yd1: f64, len: f64) -> Optio
     let c1 = m0;
     let c2 = -3.0 * y0 - 2.0 * m0 + 3.0 * y1 - m1;
     let c3 = 2.0 * y0 + m0 - 2.0 * y1 + m1;
-    let f = |t: f64| c1 + t * (2.0 * c2 + t * 3.0 * c3);
-    let theta = bisect(f, 0.0, 1.0);
+    let theta = quadratic_root_in_unit(3.0 * c3, 2.0 * c2, c1);
     Some((theta, y0 + theta * (c1 + theta * (c2 + theta * c3))))
+}
+
+/// The root in [0, 1] of a t² + b t + c, which changes sign on [0, 1] (c and a + b + c of
+/// opposite signs, so exactly one root lies there): the numerically stable quadratic
+/// formula, bisection if round-off puts both roots outside.
+fn quadratic_root_in_unit(a: f64, b: f64, c: f64) -> f64 {
+    let inside = |t: f64| (0.0..=1.0).contains(&t);
+    if a.abs() <= 1e-12 * (b.abs() + c.abs()) {
+        let t = -c / b;
+        if inside(t) {
+            return t;
+        }
+    } else {
+        let disc = b * b - 4.0 * a * c;
+        if disc >= 0.0 {
+            let q = -0.5 * (b + b.signum() * disc.sqrt());
+            for t in [q / a, if q != 0.0 { c / q } else { f64::NAN }] {
+                if inside(t) {
+                    return t;
+                }
+            }
+        }
+    }
+    bisect(|t| c + t * (b + t * a), 0.0, 1.0)
 }
 
 /// The sign change of `f` in [lo, hi] (f(lo) f(hi) ≤ 0 assumed) by 60 bisections.

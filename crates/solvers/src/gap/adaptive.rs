@@ -207,6 +207,7 @@ pub(crate) fn run(
     let mut rejected_before = false;
     let mut total_steps: u64 = 0;
     let mut scratch = vec![0.0; dim];
+    let mut y_end = vec![0.0; dim];
 
     while interval < n_int {
         let t_bp = bp(interval);
@@ -376,7 +377,12 @@ pub(crate) fn run(
         // Continuous peaks over the accepted part of the step, from the dense output
         // (before the state moves on: the step's start state is still in `y`).
         let th_end = event.map_or(1.0, |(th, _)| th.min(1.0));
-        dense_peaks(sys, &dp, &y, th_end, &mut tracker, &mut scratch);
+        if th_end < 1.0 {
+            dp.dense_all(th_end, &mut y_end);
+        } else {
+            y_end.copy_from_slice(&dp.y1);
+        }
+        dense_peaks(sys, &dp, &y, &y_end, th_end, &mut tracker, &mut scratch);
         match event {
             Some((th, ci)) => {
                 dp.dense_all(th, &mut scratch);
@@ -460,15 +466,18 @@ pub(crate) fn run(
 
 /// Peaks between the ends of an accepted step (issue 10): for every floor displacement and
 /// story shear of every building, a sign change of its rate between the step start (`y`) and
-/// θ = `th_end` means an interior extremum; when the Hermite estimate of its value could raise
-/// the running peak (within 5 %), the extremum is located by bisection on the rate of the
-/// dense output and the building's floors there update the peaks. The dense output is the
-/// error-controlled 4th-order interpolant of the step, so the peaks carry the integration
-/// tolerance, as the solution does.
+/// θ = `th_end` (state `y1`) means an interior extremum. Over a whole step the dense output is
+/// the cubic Hermite interpolant of the end values and rates plus r₅ θ²(1−θ)², so the
+/// Hermite estimate H is within |r₅|/16 of it: when |H| + |r₅|/16 reaches the running peak
+/// (always, for a step cut short by an event) the extremum is located by bisection on the
+/// rate of the dense output, and the building's floors there update the peaks. The dense
+/// output is the error-controlled interpolant of the step, so the peaks carry the
+/// integration tolerance, as the solution does.
 fn dense_peaks(
     sys: &System,
     dp: &Dopri5,
     y: &[f64],
+    y1: &[f64],
     th_end: f64,
     tracker: &mut ResponseTracker,
     scratch: &mut [f64],
@@ -481,24 +490,28 @@ fn dense_peaks(
     for (bi, b) in sys.blocks.iter().enumerate() {
         for j in 0..b.len {
             let i = b.off + j;
-            // Quantity = a·u_i − a·u_{i-1}·[story]: (floor: below = None).
             for story in [false, true] {
-                let below = (story && j > 0).then(|| i - 1);
-                let scale = if story { sys.story_k[i] } else { 1.0 };
-                let val = |u: &dyn Fn(usize) -> f64| scale * (u(i) - below.map_or(0.0, u));
-                let (y0, yd0) = (val(&|m| y[m]), val(&|m| y[n + m]));
-                let (y1, yd1) = (
-                    val(&|m| dp.dense(m, th_end)),
-                    val(&|m| dp.dense(n + m, th_end)),
-                );
-                let Some((_, h)) = crate::response::hermite_extremum(y0, yd0, y1, yd1, len) else {
+                let below = if story && j > 0 { Some(i - 1) } else { None };
+                let sc = if story { sys.story_k[i] } else { 1.0 };
+                let comb =
+                    |u: &[f64], off: usize| sc * (u[off + i] - below.map_or(0.0, |l| u[off + l]));
+                let (y0, yd0, ye, yde) = (comb(y, 0), comb(y, n), comb(y1, 0), comb(y1, n));
+                let Some((_, h)) = crate::response::hermite_extremum(y0, yd0, ye, yde, len) else {
                     continue;
                 };
                 let (vmax, dmax) = tracker.peak(bi, j);
-                if h.abs() < 0.95 * if story { vmax } else { dmax } {
+                let peak = if story { vmax } else { dmax };
+                let slack = if th_end < 1.0 {
+                    f64::INFINITY
+                } else {
+                    sc * (dp.quartic(i) - below.map_or(0.0, |l| dp.quartic(l))).abs() / 16.0
+                };
+                if h.abs() + slack < peak {
                     continue;
                 }
-                let rate = |th: f64| val(&|m| dp.dense(n + m, th));
+                let rate = |th: f64| {
+                    sc * (dp.dense(n + i, th) - below.map_or(0.0, |l| dp.dense(n + l, th)))
+                };
                 let th = crate::response::bisect(rate, 0.0, th_end);
                 for m in b.off..b.off + b.len {
                     scratch[m] = dp.dense(m, th);

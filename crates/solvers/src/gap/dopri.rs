@@ -246,6 +246,13 @@ impl Dopri5 {
         r[0][i] + theta * (r[1][i] + t1 * (r[2][i] + theta * (r[3][i] + t1 * r[4][i])))
     }
 
+    /// The coefficient r₅ of component `i`: the dense output is the cubic Hermite
+    /// interpolant of the step's end values and slopes plus r₅ θ²(1−θ)².
+    #[inline]
+    pub fn quartic(&self, i: usize) -> f64 {
+        self.rcont[4][i]
+    }
+
     /// Time derivative of the dense output of component `i` at θ.
     #[inline]
     pub fn dense_rate(&self, i: usize, theta: f64) -> f64 {

@@ -6,8 +6,9 @@
 //! At each sample the solver knows y and ẏ (ẏ = Σ c_n q̇_n) at both ends of the interval just
 //! integrated. A sign change of ẏ means an interior extremum (intervals are at most one
 //! record step, shorter than the shortest periods that matter: at most one extremum of the
-//! quantity). Its value is estimated by the cubic Hermite interpolant of (y, ẏ) at the ends;
-//! when that estimate could raise the running peak (it is within 5 % of it or above), the
+//! quantity). Its value is estimated by the cubic Hermite interpolant H of (y, ẏ) at the
+//! ends; when that estimate could raise the running peak (|H| ≥ 0.9 × peak and |H| plus the
+//! bound len⁴/384 · Σ|c_n| ω_n⁴ |A_n − iB_n| on |y − H| reaches the peak), the
 //! extremum is located by Newton's method on ẏ(s) = 0 with ÿ from the equations of motion
 //! (q̈ = f − 2ζωq̇ − ω²q), started at the Hermite estimate, on the closed form, to a
 //! relative step of 1e-13, and its exact value replaces the peak if larger.
@@ -33,19 +34,9 @@ pub struct Interval {
 
 pub use crate::response::hermite_extremum;
 
-/// The exact extremum of y = Σ_m c[m] q_{n_m} over `iv` (modes `range` of one building,
-/// `c` indexed from the building's first mode), by Newton on ẏ = 0 from `s0`, kept in
-/// [0, `len`]. Returns y at the extremum.
-pub fn refine(
-    modal: &Modal,
-    range: std::ops::Range<usize>,
-    c: &[f64],
-    iv: &Interval,
-    len: f64,
-    s0: f64,
-) -> f64 {
-    let arcs: Vec<Arc> = range
-        .clone()
+/// The closed-form arcs of the modes `range` over the interval `iv`.
+pub fn arcs(modal: &Modal, range: std::ops::Range<usize>, iv: &Interval) -> Vec<Arc> {
+    range
         .map(|n| {
             let extra = iv.fc.as_ref().map_or(0.0, |f| f[n]);
             Arc::new(
@@ -58,15 +49,32 @@ pub fn refine(
                 iv.tau,
             )
         })
-        .collect();
+        .collect()
+}
+
+/// Bound on |y − H| over an interval of length `len`, H the cubic Hermite interpolant of
+/// y = Σ c_m q_m: len⁴/384 · max|y⁗| with |q_m⁗| ≤ ω_m⁴ |A_m − iB_m| (the homogeneous part;
+/// the particular part is linear in time).
+pub fn hermite_error_bound(modal: &Modal, first: usize, c: &[f64], arcs: &[Arc], len: f64) -> f64 {
+    let mut d4 = 0.0;
+    for (m, (cm, a)) in c.iter().zip(arcs).enumerate() {
+        let w2 = modal.omega[first + m] * modal.omega[first + m];
+        d4 += cm.abs() * w2 * w2 * a.amplitude();
+    }
+    len.powi(4) / 384.0 * d4
+}
+
+/// The exact extremum of y = Σ_m c[m] q_{first+m} on the closed-form `arcs`, by Newton on
+/// ẏ = 0 from `s0`, kept in [0, `len`]. Returns y at the extremum.
+pub fn refine(modal: &Modal, first: usize, c: &[f64], arcs: &[Arc], len: f64, s0: f64) -> f64 {
     let eval = |s: f64| {
         let (mut y, mut yd, mut ydd) = (0.0, 0.0, 0.0);
-        for ((a, &cm), n) in arcs.iter().zip(c).zip(range.clone()) {
+        for (m, (a, &cm)) in arcs.iter().zip(c).enumerate() {
             if cm != 0.0 {
                 let (x, v) = a.xv(s);
                 y += cm * x;
                 yd += cm * v;
-                ydd += cm * modal.accel(n, x, v, a.load(s));
+                ydd += cm * modal.accel(first + m, x, v, a.load(s));
             }
         }
         (y, yd, ydd)
@@ -79,11 +87,11 @@ pub fn refine(
         }
         let next = (s - yd / ydd).clamp(0.0, len);
         let step = (next - s).abs();
-        s = next;
-        (y, yd, ydd) = eval(s);
         if step <= 1e-13 * len {
             break;
         }
+        s = next;
+        (y, yd, ydd) = eval(s);
     }
     y
 }
