@@ -49,6 +49,25 @@ impl BuildingModes {
     }
 }
 
+impl BuildingModes {
+    /// Floor displacements u = Φ q and velocities u̇ = Φ q̇ in one pass over the mode shapes.
+    #[inline]
+    pub fn to_floors2(&self, q: &[f64], qd: &[f64], u: &mut [f64], ud: &mut [f64]) {
+        let nf = self.n_floors;
+        let (u, ud) = (&mut u[..nf], &mut ud[..nf]);
+        u.fill(0.0);
+        ud.fill(0.0);
+        let r = self.range.clone();
+        for (m, (&qm, &qdm)) in q[r.clone()].iter().zip(&qd[r]).enumerate() {
+            let col = &self.phi[m * nf..(m + 1) * nf];
+            for ((o, od), p) in u.iter_mut().zip(ud.iter_mut()).zip(col) {
+                *o += p * qm;
+                *od += p * qdm;
+            }
+        }
+    }
+}
+
 /// All kept modes of all buildings (the immutable modal problem).
 #[derive(Debug, Clone)]
 pub struct Modal {

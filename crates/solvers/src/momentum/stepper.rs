@@ -411,8 +411,7 @@ impl<'a> Stepper<'a> {
         let len = self.interval.tau_done;
         for (b, bm) in self.p.modal.buildings.iter().enumerate() {
             let u = &mut self.u[b];
-            bm.to_floors(x, u);
-            bm.to_floors(v, &mut self.ud[b]);
+            bm.to_floors2(x, v, u, &mut self.ud[b]);
             let (dm, sm, k) = (
                 &mut self.disp_max[b],
                 &mut self.shear_max[b],
