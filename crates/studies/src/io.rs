@@ -4,7 +4,7 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use solvers::{History, RunOutput};
+use solvers::History;
 use structure::Scene;
 
 /// Errors from writing outputs.
@@ -91,9 +91,4 @@ pub fn history_csv(scene: &Scene, history: &History) -> String {
         out.push('\n');
     }
     out
-}
-
-/// Writes the run's JSON (the documented `pound run --out` layout).
-pub fn write_run(path: &Path, run: &RunOutput) -> Result<(), OutputError> {
-    write_json(path, run)
 }

@@ -79,6 +79,9 @@ enum Command {
         /// Write floor displacements and story shears over time as CSV here.
         #[arg(long)]
         history: Option<PathBuf>,
+        /// Skip the run without contact that gives the amplification factors.
+        #[arg(long)]
+        no_baseline: bool,
     },
     /// Export a scene to another program; the script is printed on stdout.
     Export {
@@ -305,6 +308,7 @@ fn run(cli: Cli) -> Result<()> {
             set,
             out,
             history,
+            no_baseline,
         } => {
             let scene = load_scene(&path, &set)?;
             let method = match method {
@@ -314,12 +318,33 @@ fn run(cli: Cli) -> Result<()> {
             let mut hist = history.as_ref().map(|_| History::default());
             let result = solvers::run(&scene, method, hist.as_mut())
                 .with_context(|| format!("{}: {method} analysis failed", path.display()))?;
+            // The same model without contact, same method and options: the denominator of
+            // the amplification factor.
+            let amplification = if no_baseline || scene.contacts.is_empty() {
+                None
+            } else {
+                let mut free = scene.clone();
+                free.contacts.clear();
+                let base = solvers::run(&free, method, None).with_context(|| {
+                    format!(
+                        "{}: {method} analysis without contact failed",
+                        path.display()
+                    )
+                })?;
+                Some(report::amplification(&result, &base))
+            };
             if let (Some(p), Some(h)) = (&history, &hist) {
                 io::write_atomic(p, io::history_csv(&scene, h).as_bytes())?;
             }
             match out {
-                Some(p) => io::write_run(&p, &result)?,
-                None => print!("{}", report::run_summary(&scene, &result)),
+                Some(p) => {
+                    let doc = report::run_json(&scene, &set, &result, amplification.as_deref());
+                    io::write_json(&p, &doc)?
+                }
+                None => print!(
+                    "{}",
+                    report::run_summary(&scene, &result, amplification.as_deref())
+                ),
             }
         }
         Command::Export {

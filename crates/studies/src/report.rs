@@ -130,23 +130,82 @@ pub fn record_table(gm: &GroundMotion) -> String {
 }
 
 /// Summary of a run for stdout.
-pub fn run_summary(scene: &Scene, run: &RunOutput) -> String {
+/// Amplification factors per building and story: peak story shear with contact over the
+/// peak story shear of the same model without contact (same method and options).
+pub fn amplification(run: &RunOutput, without: &RunOutput) -> Vec<Vec<f64>> {
+    run.buildings
+        .iter()
+        .zip(&without.buildings)
+        .map(|(a, b)| {
+            a.story_shear_max
+                .iter()
+                .zip(&b.story_shear_max)
+                .map(|(x, y)| x / y)
+                .collect()
+        })
+        .collect()
+}
+
+/// The `pound run --out` document: the run's result plus what was run (program version,
+/// the `--set` overrides as given, the record as resolved) and the amplification factors.
+pub fn run_json(
+    scene: &Scene,
+    overrides: &[String],
+    run: &RunOutput,
+    amplification: Option<&[Vec<f64>]>,
+) -> serde_json::Value {
+    let mut v = serde_json::to_value(run).expect("a run serialises");
+    let obj = v.as_object_mut().expect("an object");
+    obj.insert("version".into(), env!("CARGO_PKG_VERSION").into());
+    obj.insert("overrides".into(), overrides.into());
+    if let (Some(g), Some(src)) = (&scene.ground, &scene.ground_source) {
+        let file = std::fs::canonicalize(&src.file).unwrap_or_else(|_| src.file.clone());
+        obj.insert(
+            "record".into(),
+            serde_json::json!({
+                "file": file.display().to_string(),
+                "pga_g": src.pga_g,
+                "scale": src.factor,
+                "dt_s": g.dt,
+                "npts": g.npts(),
+            }),
+        );
+    }
+    if let Some(a) = amplification {
+        let per: Vec<serde_json::Value> = run
+            .buildings
+            .iter()
+            .zip(a)
+            .map(|(b, f)| serde_json::json!({"name": b.name, "story_shear": f}))
+            .collect();
+        obj.insert("amplification".into(), per.into());
+    }
+    v
+}
+
+pub fn run_summary(scene: &Scene, run: &RunOutput, amplification: Option<&[Vec<f64>]>) -> String {
     let mut s = format!(
         "{} — method {} ({})\n",
         scene.name, run.method, run.settings
     );
-    for b in &run.buildings {
+    for (bi, b) in run.buildings.iter().enumerate() {
+        let amp = amplification.and_then(|a| a.get(bi));
         s.push_str(&format!(
-            "{}\n  story  shear max (MN)  floor disp max (m)\n",
-            b.name
+            "{}\n  story  shear max (MN)  floor disp max (m){}\n",
+            b.name,
+            if amp.is_some() { "  amplification" } else { "" }
         ));
         for j in (0..b.story_shear_max.len()).rev() {
             s.push_str(&format!(
-                "  {:5} {:16.4} {:19.5}\n",
+                "  {:5} {:16.4} {:19.5}",
                 j + 1,
                 b.story_shear_max[j] / 1e6,
                 b.floor_displacement_max[j]
             ));
+            if let Some(a) = amp {
+                s.push_str(&format!(" {:14.3}", a[j]));
+            }
+            s.push('\n');
         }
     }
     s.push_str(&format!("impacts: {}", run.impacts.len()));
