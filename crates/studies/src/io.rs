@@ -23,6 +23,7 @@ pub enum OutputError {
 }
 
 /// Writes `bytes` to `path` atomically (temporary file in the same folder, then rename).
+/// An existing read-only file at `path` is an error, not replaced.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
     let err = |source| OutputError::Io {
         path: path.display().to_string(),
@@ -33,6 +34,15 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
         _ => PathBuf::from("."),
     };
     std::fs::create_dir_all(&dir).map_err(err)?;
+    // A rename replaces even a read-only file: refuse one explicitly.
+    if let Ok(m) = std::fs::metadata(path) {
+        if m.permissions().readonly() {
+            return Err(err(std::io::Error::new(
+                std::io::ErrorKind::PermissionDenied,
+                "the file exists and is read-only; it is not replaced",
+            )));
+        }
+    }
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())

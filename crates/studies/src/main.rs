@@ -339,7 +339,13 @@ fn run(cli: Cli) -> Result<()> {
             match out {
                 Some(p) => {
                     let doc = report::run_json(&scene, &set, &result, amplification.as_deref());
-                    io::write_json(&p, &doc)?
+                    // All or nothing: without the result, the history is not left behind.
+                    if let Err(e) = io::write_json(&p, &doc) {
+                        if let Some(h) = &history {
+                            let _ = std::fs::remove_file(h);
+                        }
+                        return Err(e.into());
+                    }
                 }
                 None => print!(
                     "{}",

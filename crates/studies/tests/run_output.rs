@@ -82,3 +82,35 @@ fn run_json_has_provenance_and_amplification() {
     ]);
     assert!(String::from_utf8_lossy(&o.stdout).contains("amplification"));
 }
+
+/// `--out` onto a read-only file fails (exit 1) and leaves it as it was; the history written
+/// before is removed: all or nothing.
+#[test]
+fn read_only_out_is_not_replaced_and_nothing_is_left_behind() {
+    let d = TempDir::new("readonly");
+    let out = d.write("run.json", "keep me\n");
+    let mut perm = std::fs::metadata(&out).unwrap().permissions();
+    perm.set_readonly(true);
+    std::fs::set_permissions(&out, perm).unwrap();
+    let hist = d.path("history.csv");
+    let o = pound(&[
+        "run",
+        &scene(),
+        "--method",
+        "momentum",
+        "--set",
+        "analysis.duration=2",
+        "--history",
+        hist.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("read-only") && err.contains("run.json"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), "keep me\n");
+    assert!(!hist.exists(), "history left behind");
+}
