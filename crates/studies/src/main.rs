@@ -107,6 +107,9 @@ enum ExportTarget {
         /// Override a scene value: PATH=VALUE on a dotted TOML path (repeatable).
         #[arg(long = "set", value_name = "PATH=VALUE")]
         set: Vec<String>,
+        /// Write the script here instead of stdout (nothing is written if the scene is refused).
+        #[arg(long)]
+        out: Option<PathBuf>,
     },
 }
 
@@ -354,14 +357,17 @@ fn run(cli: Cli) -> Result<()> {
             }
         }
         Command::Export {
-            target: ExportTarget::Opensees { scene, set },
+            target: ExportTarget::Opensees { scene, set, out },
         } => {
             let scene = load_scene(&scene, &set)?;
             let script = studies::export::opensees_script(&scene).map_err(input)?;
             for w in studies::export::opensees_caveats(&scene) {
                 eprintln!("warning: {w}");
             }
-            print!("{script}");
+            match out {
+                Some(p) => io::write_atomic(&p, script.as_bytes())?,
+                None => print!("{script}"),
+            }
         }
         Command::Studies { command } => studies_command(command)?,
     }

@@ -385,6 +385,42 @@ fn cli_refuses_hertz_damp_with_exit_2() {
     assert!(out.stdout.is_empty(), "no partial script on stdout");
 }
 
+/// `--out`: the script goes to the file; a refused scene writes nothing.
+#[test]
+fn cli_out_writes_the_script_or_nothing() {
+    let d = common::TempDir::new("export-out");
+    let path = paper_scene_path();
+    let file = d.path("model.py");
+    let out = pound(&[
+        "export",
+        "opensees",
+        path.to_str().unwrap(),
+        "--out",
+        file.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(out.stdout.is_empty());
+    assert!(std::fs::read_to_string(&file)
+        .unwrap()
+        .contains("import openseespy"));
+    let refused = d.path("refused.py");
+    let out = pound(&[
+        "export",
+        "opensees",
+        path.to_str().unwrap(),
+        "--set",
+        "gap_element.law=hertz-damp",
+        "--out",
+        refused.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(!refused.exists(), "nothing written when refused");
+}
+
 #[test]
 fn cli_help_lists_export() {
     let out = pound(&["export", "--help"]);

@@ -38,6 +38,11 @@ fn quick_robustness_sweep_counts_agree_with_the_cases() {
     ] {
         assert!(dir.join(f).is_file(), "{f} missing");
     }
+    let summary = std::fs::read_to_string(dir.join("summary.md")).unwrap();
+    assert!(
+        summary.contains("**Quick run**"),
+        "quick results are marked: {summary}"
+    );
     let rows = read_csv(&dir.join("robustness.csv"));
     let h = &rows[0];
     let col = |name: &str| h.iter().position(|x| x == name).unwrap();

@@ -410,6 +410,12 @@ pub fn write_summary(
     figures: &[(&str, &str)],
 ) -> Result<()> {
     let mut s = format!("## {title}\n\n");
+    if ctx.opts.quick {
+        s.push_str(
+            "**Quick run** (`--quick`: small grids, one record, 12 s of analysis): a smoke test, \
+             not results.\n\n",
+        );
+    }
     for r in reading {
         s.push_str(r);
         s.push(' ');
