@@ -444,7 +444,13 @@ fn studies_command(command: StudiesCommand) -> Result<()> {
             let t0 = std::time::Instant::now();
             let mut timings = serde_json::Map::new();
             for n in &names {
-                let r = st::run_study(n, &cfg).with_context(|| format!("study `{n}`"))?;
+                let r = st::run_study(n, &cfg).map_err(|e| match e {
+                    // A definition or scene the study cannot use is bad input (exit 2).
+                    studies::sweep::StudyError::Definition { .. } => {
+                        input(format!("study `{n}`: {e}"))
+                    }
+                    e => anyhow::Error::new(e).context(format!("study `{n}`")),
+                })?;
                 eprintln!(
                     "{:<12} {} cases: {} run ({} failed), {} cached, {} in other shards; {:.1} s{}",
                     r.name,

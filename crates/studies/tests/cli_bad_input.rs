@@ -1078,3 +1078,46 @@ fn usage_errors_exit_2() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("teleport"));
     assert!(!json.exists());
 }
+
+/// A study scene without two buildings joined by a contact is refused before anything runs
+/// (it used to panic in the gap study), with exit 2 naming the study; nothing is written.
+#[test]
+fn study_scene_without_a_pair_is_refused() {
+    let d = TempDir::new("study-scene");
+    let rec = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../data/ground-motions/RSN752_LOMAP_CAP000.AT2"
+    );
+    d.write(
+        "one.toml",
+        &format!(
+            "name = \"one\"\n[[buildings]]\nname = \"a\"\nstories = 3\nmass = 1.0e6\nstory_stiffness = 1.0e9\ndamping_ratio = 0.05\n[ground_motion]\nfile = \"{rec}\"\npga = 0.4\n"
+        ),
+    );
+    let def = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../studies/gap.toml"
+    ))
+    .unwrap()
+    .replace("scene = \"paper/scene.toml\"", "scene = \"one.toml\"");
+    d.write("gap.toml", &def);
+    let out = d.path("results");
+    assert_bad(
+        &[
+            "studies".into(),
+            "run".into(),
+            "gap".into(),
+            "--quick".into(),
+            "--studies-dir".into(),
+            s(&d.0),
+            "--out".into(),
+            s(&out),
+        ],
+        &[
+            "study `gap`",
+            "two buildings joined by a contact",
+            "1 building(s)",
+        ],
+        &[&out],
+    );
+}

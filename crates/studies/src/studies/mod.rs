@@ -190,8 +190,31 @@ fn make_ctx(
 }
 
 /// The full case list of a study: its cases followed by their baselines, without repeats.
+/// Every study compares two buildings through contact 0: a scene without them is refused
+/// here, naming the study, before anything runs.
 pub fn all_cases(st: &dyn Study, ctx: &Ctx) -> Result<Vec<CaseSpec>> {
     let cases = st.cases(ctx)?;
+    if let Some(first) = cases.first() {
+        // The scene file itself, before the study's overrides (which assume the pair).
+        let scene = CaseSpec::new(&first.scene, first.method)
+            .load_scene(&ctx.studies_dir)
+            .map_err(|message| StudyError::Definition {
+                file: ctx.def_file.clone(),
+                message,
+            })?;
+        if scene.buildings.len() < 2 || scene.contacts.is_empty() {
+            return Err(StudyError::Definition {
+                file: ctx.def_file.clone(),
+                message: format!(
+                    "study `{}` needs a scene with two buildings joined by a contact; `{}` has {} building(s) and {} contact(s)",
+                    ctx.name,
+                    first.scene,
+                    scene.buildings.len(),
+                    scene.contacts.len()
+                ),
+            });
+        }
+    }
     let baselines: Vec<CaseSpec> = cases.iter().map(|c| c.baseline()).collect();
     Ok(dedup(cases.into_iter().chain(baselines).collect()))
 }
