@@ -132,10 +132,21 @@ pub struct RunOutput {
     pub r_n: Vec<ContactFlexibility>,
 }
 
-/// Sampled floor displacements (relative to the ground) over time.
+/// Sampled state over time: at every record point and at every event instant (impact,
+/// contact closure or opening, release), so the grid is not uniform.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct History {
+    /// s.
     pub time: Vec<f64>,
-    /// One row per sample: the floors of building 0 (floor 1 first), then building 1, …
+    /// Floor displacements relative to the ground, m. One row per sample: the floors of
+    /// building 0 (floor 1 first), then building 1, …
     pub displacement: Vec<Vec<f64>>,
+    /// Floor velocities relative to the ground, m/s, same layout. At an impact instant
+    /// the sample after the velocity jump.
+    pub velocity: Vec<Vec<f64>>,
+    /// Contact forces, N (compressive > 0), one per scene contact. The gap element: the
+    /// force of its law. The momentum method: the holding force of a persistent contact
+    /// (constant over each held segment), 0 in free flight; its impacts are impulses
+    /// (finite momentum in zero time), listed in `RunOutput::impacts`, not forces.
+    pub contact_force: Vec<Vec<f64>>,
 }

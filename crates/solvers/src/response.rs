@@ -14,6 +14,9 @@ pub struct ResponseTracker {
     /// Offset of each building's first floor in a concatenated displacement vector.
     pub offsets: Vec<usize>,
     row: Vec<f64>,
+    /// Floor velocities (m/s) and contact forces (N) of the next history sample.
+    vrow: Vec<f64>,
+    frow: Vec<f64>,
 }
 
 impl ResponseTracker {
@@ -43,6 +46,8 @@ impl ResponseTracker {
             names: scene.buildings.iter().map(|b| b.name.clone()).collect(),
             offsets,
             row: vec![0.0; off],
+            vrow: vec![0.0; off],
+            frow: vec![0.0; scene.contacts.len()],
         }
     }
 
@@ -52,6 +57,20 @@ impl ResponseTracker {
         self.observe_peaks(b, u);
         let off = self.offsets[b];
         self.row[off..off + u.len()].copy_from_slice(u);
+    }
+
+    /// Records the floor velocities `v` (m/s) of building `b` for the next history sample.
+    #[inline]
+    pub fn observe_velocity(&mut self, b: usize, v: &[f64]) {
+        let off = self.offsets[b];
+        self.vrow[off..off + v.len()].copy_from_slice(v);
+    }
+
+    /// Records the contact forces (N, compressive > 0, one per scene contact) for the next
+    /// history sample.
+    #[inline]
+    pub fn observe_contact_forces(&mut self, f: &[f64]) {
+        self.frow.copy_from_slice(f);
     }
 
     /// Updates the peaks of building `b` with the floor displacements `u` (m) at an instant
@@ -87,6 +106,8 @@ impl ResponseTracker {
         if let Some(h) = history {
             h.time.push(t);
             h.displacement.push(self.row.clone());
+            h.velocity.push(self.vrow.clone());
+            h.contact_force.push(self.frow.clone());
         }
     }
 

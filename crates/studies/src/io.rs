@@ -70,35 +70,139 @@ pub fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<(), Out
     write_atomic(path, s.as_bytes())
 }
 
-/// CSV text of a history: `time_s`, floor displacements `<building>_u<floor>_m`, then story
-/// shears `<building>_V<story>_N` (V_j = k_j (u_j − u_{j−1})).
-pub fn history_csv(scene: &Scene, history: &History) -> String {
-    let mut out = String::from("time_s");
-    for b in &scene.buildings {
-        for f in 1..=b.n_floors() {
-            out.push_str(&format!(",{}_u{f}_m", b.name));
-        }
-    }
-    for b in &scene.buildings {
-        for f in 1..=b.n_floors() {
-            out.push_str(&format!(",{}_V{f}_N", b.name));
-        }
-    }
-    out.push('\n');
-    for (t, row) in history.time.iter().zip(&history.displacement) {
-        out.push_str(&format!("{t:.6}"));
-        for u in row {
-            out.push_str(&format!(",{u:.9e}"));
-        }
-        let mut off = 0;
+/// CSV text of a history, one row per sample (record points and event instants, so the
+/// grid is not uniform). Columns, every header quoted, buildings as named in the scene,
+/// floors and stories counted from 1, contacts from 0 as in the JSON:
+/// `time_s`; the ground acceleration `ground_a_m_per_s2`; floor displacements relative to the ground `<building>_u<floor>_m`; floor
+/// velocities `<building>_v<floor>_m_per_s`; absolute floor accelerations
+/// `<building>_a<floor>_abs_m_per_s2` from each floor's equilibrium,
+/// a = M⁻¹ (f_contact − C u̇ − K u) (exact for the gap element and for the momentum method
+/// with all modes; with fewer modes the equilibrium acceleration of the reconstructed
+/// motion, and at an impact instant the regular part only, the impulse being in the JSON);
+/// inter-story drifts `<building>_drift<story>_m` = u_j − u_{j−1}; story shears
+/// `<building>_V<story>_N` = k_j (u_j − u_{j−1}); contact forces `contact<i>_force_N`
+/// (compressive > 0).
+pub fn history_csv(scene: &Scene, history: &History) -> Result<String, OutputError> {
+    let csv_err = |e: csv::Error| OutputError::Io {
+        path: "history".into(),
+        source: std::io::Error::other(e.to_string()),
+    };
+    let mut w = csv::WriterBuilder::new()
+        .quote_style(csv::QuoteStyle::NonNumeric)
+        .from_writer(Vec::new());
+    let mut header = vec!["time_s".to_string(), "ground_a_m_per_s2".to_string()];
+    let cols: [(&str, &str); 5] = [
+        ("u", "_m"),
+        ("v", "_m_per_s"),
+        ("a", "_abs_m_per_s2"),
+        ("drift", "_m"),
+        ("V", "_N"),
+    ];
+    for (q, unit) in cols {
         for b in &scene.buildings {
-            let n = b.n_floors();
-            for v in b.story_shears(&row[off..off + n]) {
-                out.push_str(&format!(",{v:.9e}"));
+            for f in 1..=b.n_floors() {
+                header.push(format!("{}_{q}{f}{unit}", b.name));
             }
-            off += n;
         }
-        out.push('\n');
     }
-    out
+    for i in 0..scene.contacts.len() {
+        header.push(format!("contact{i}_force_N"));
+    }
+    w.write_record(&header).map_err(csv_err)?;
+    // Damping matrices once (classical damping from each building's modes).
+    let damping: Vec<Option<Vec<f64>>> = scene
+        .buildings
+        .iter()
+        .map(|b| {
+            b.modes()
+                .ok()
+                .map(|m| b.damping_matrix(&m).as_slice().to_vec())
+        })
+        .collect();
+    let fmt = |x: f64| format!("{x:.9e}");
+    let nc = scene.contacts.len();
+    for (s, &t) in history.time.iter().enumerate() {
+        let u = &history.displacement[s];
+        let v = history.velocity.get(s).map(|r| r.as_slice()).unwrap_or(&[]);
+        let fc = history
+            .contact_force
+            .get(s)
+            .map(|r| r.as_slice())
+            .unwrap_or(&[]);
+        let ag = scene.ground.as_ref().map_or(0.0, |g| g.accel_at(t));
+        let mut row = vec![format!("{t:e}"), fmt(ag)];
+        let mut off = 0;
+        let mut offsets = Vec::new();
+        for b in &scene.buildings {
+            offsets.push(off);
+            off += b.n_floors();
+        }
+        let floors = |b: usize| offsets[b]..offsets[b] + scene.buildings[b].n_floors();
+        row.extend(u.iter().map(|&x| fmt(x)));
+        if v.len() == u.len() {
+            row.extend(v.iter().map(|&x| fmt(x)));
+        } else {
+            row.extend(std::iter::repeat_n(String::new(), u.len()));
+        }
+        // Absolute accelerations from floor equilibrium.
+        for (bi, b) in scene.buildings.iter().enumerate() {
+            let n = b.n_floors();
+            let r = floors(bi);
+            let (ub, vb) = (&u[r.clone()], v.get(r.clone()));
+            let mut f = vec![0.0; n];
+            for (j, fj) in f.iter_mut().enumerate() {
+                let below = if j > 0 { ub[j - 1] } else { 0.0 };
+                *fj -= b.story_stiffness[j] * (ub[j] - below);
+                if j + 1 < n {
+                    *fj += b.story_stiffness[j + 1] * (ub[j + 1] - ub[j]);
+                }
+            }
+            match (vb, &damping[bi]) {
+                (Some(vb), Some(c)) => {
+                    for (j, vj) in vb.iter().enumerate() {
+                        for (i, fi) in f.iter_mut().enumerate() {
+                            *fi -= c[j * n + i] * vj;
+                        }
+                    }
+                }
+                _ => {
+                    row.extend(std::iter::repeat_n(String::new(), n));
+                    continue;
+                }
+            }
+            if fc.len() == nc {
+                for (c, &force) in scene.contacts.iter().zip(fc) {
+                    if c.left == bi {
+                        f[c.left_dof] -= force;
+                    }
+                    if c.right == bi {
+                        f[c.right_dof] += force;
+                    }
+                }
+            }
+            row.extend(f.iter().zip(&b.masses).map(|(fi, m)| fmt(fi / m)));
+        }
+        for (bi, b) in scene.buildings.iter().enumerate() {
+            let ub = &u[floors(bi)];
+            let mut below = 0.0;
+            for &x in ub.iter().take(b.n_floors()) {
+                row.push(fmt(x - below));
+                below = x;
+            }
+        }
+        for (bi, b) in scene.buildings.iter().enumerate() {
+            row.extend(b.story_shears(&u[floors(bi)]).into_iter().map(fmt));
+        }
+        if fc.len() == nc {
+            row.extend(fc.iter().map(|&x| fmt(x)));
+        } else {
+            row.extend(std::iter::repeat_n(String::new(), nc));
+        }
+        w.write_record(&row).map_err(csv_err)?;
+    }
+    let bytes = w.into_inner().map_err(|e| OutputError::Io {
+        path: "history".into(),
+        source: std::io::Error::other(e.to_string()),
+    })?;
+    Ok(String::from_utf8_lossy(&bytes).into_owned())
 }

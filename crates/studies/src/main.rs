@@ -337,7 +337,7 @@ fn run(cli: Cli) -> Result<()> {
                 Some(report::amplification(&result, &base))
             };
             if let (Some(p), Some(h)) = (&history, &hist) {
-                io::write_atomic(p, io::history_csv(&scene, h).as_bytes())?;
+                io::write_atomic(p, io::history_csv(&scene, h)?.as_bytes())?;
             }
             match out {
                 Some(p) => {

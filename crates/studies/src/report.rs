@@ -158,6 +158,11 @@ pub fn run_json(
     let obj = v.as_object_mut().expect("an object");
     obj.insert("version".into(), env!("CARGO_PKG_VERSION").into());
     obj.insert("overrides".into(), overrides.into());
+    obj.insert("resolved_scene".into(), resolved_scene(scene));
+    if let Some(f) = &scene.file {
+        let f = std::fs::canonicalize(f).unwrap_or_else(|_| f.clone());
+        obj.insert("scene_file".into(), f.display().to_string().into());
+    }
     if let (Some(g), Some(src)) = (&scene.ground, &scene.ground_source) {
         let file = std::fs::canonicalize(&src.file).unwrap_or_else(|_| src.file.clone());
         obj.insert(
@@ -238,4 +243,89 @@ pub fn run_summary(scene: &Scene, run: &RunOutput, amplification: Option<&[Vec<f
         st.wall_seconds * 1e3
     ));
     s
+}
+
+/// The scene as it was run, after `--set` overrides and defaults, in the scene-file format
+/// (keys as in the README's scene section, floors counted from 1, SI units): every building
+/// with its per-floor masses, story stiffnesses and damping, every contact, the record with
+/// its absolute path and its `pga` (g) or `scale`, and every solver option (`momentum.modes`
+/// is `null` for all modes). Written as TOML without its `null`s it is a scene file that runs
+/// the same analysis.
+pub fn resolved_scene(scene: &Scene) -> serde_json::Value {
+    use structure::model::Damping;
+    let buildings: Vec<serde_json::Value> = scene
+        .buildings
+        .iter()
+        .map(|b| {
+            let damping = match &b.damping {
+                Damping::Uniform(z) => serde_json::json!(z),
+                Damping::PerMode(v) => serde_json::json!(v),
+            };
+            serde_json::json!({
+                "name": b.name,
+                "masses": b.masses,
+                "story_stiffness": b.story_stiffness,
+                "damping_ratio": damping,
+                "initial_displacement": b.initial_displacement,
+                "initial_velocity": b.initial_velocity,
+            })
+        })
+        .collect();
+    let contacts: Vec<serde_json::Value> = scene
+        .contacts
+        .iter()
+        .map(|c| {
+            serde_json::json!({
+                "left": scene.buildings[c.left].name,
+                "left_floor": c.left_dof + 1,
+                "right": scene.buildings[c.right].name,
+                "right_floor": c.right_dof + 1,
+                "gap": c.gap,
+                "restitution": c.restitution,
+            })
+        })
+        .collect();
+    let ground = scene.ground_source.as_ref().map(|src| {
+        let file = std::fs::canonicalize(&src.file).unwrap_or_else(|_| src.file.clone());
+        let mut g = serde_json::json!({ "file": file.display().to_string() });
+        if let serde_json::Value::Object(f) = serde_json::to_value(src.format).unwrap_or_default() {
+            g.as_object_mut().expect("an object").extend(f);
+        }
+        match src.pga_g {
+            Some(p) => g["pga"] = p.into(),
+            None => g["scale"] = src.factor.into(),
+        }
+        g
+    });
+    let m = &scene.momentum;
+    let g = &scene.gap_element;
+    serde_json::json!({
+        "name": scene.name,
+        "buildings": buildings,
+        "contacts": contacts,
+        "ground_motion": ground,
+        "analysis": {
+            "duration": scene.duration,
+            "max_impact_rate": scene.limits.max_impact_rate,
+            "max_steps": scene.limits.max_steps,
+        },
+        "momentum": {
+            "modes": m.modes,
+            "impulse": to_json(m.impulse),
+            "persistent_contact": m.persistent_contact,
+            "capture_velocity": m.capture_velocity,
+        },
+        "gap_element": {
+            "stiffness": g.stiffness,
+            "law": to_json(g.law),
+            "integrator": to_json(g.integrator),
+            "tolerance": g.tolerance,
+            "time_step": g.time_step,
+            "tension": g.tension,
+        },
+    })
+}
+
+fn to_json<T: serde::Serialize>(v: T) -> serde_json::Value {
+    serde_json::to_value(v).unwrap_or(serde_json::Value::Null)
 }

@@ -114,3 +114,264 @@ fn read_only_out_is_not_replaced_and_nothing_is_left_behind() {
     assert_eq!(std::fs::read_to_string(&out).unwrap(), "keep me\n");
     assert!(!hist.exists(), "history left behind");
 }
+
+const FREE_SCENE: &str = r#"
+[[buildings]]
+name = "left"
+masses = [1.0e5, 1.0e5, 1.0e5]
+story_stiffness = [2.0e8, 1.5e8, 1.0e8]
+initial_velocity = [0.2, 0.4, 0.5]
+
+[[buildings]]
+name = "right, east"
+masses = [1.5e5, 1.5e5]
+story_stiffness = [3.0e8, 2.0e8]
+
+[[contacts]]
+left = "left"
+left_floor = 2
+right = "right, east"
+right_floor = 2
+gap = 0.01
+
+[analysis]
+duration = 2.0
+
+[gap_element]
+stiffness = 2e8
+law = "linear"
+tolerance = 1e-11
+"#;
+
+struct Csv {
+    header: Vec<String>,
+    rows: Vec<Vec<f64>>,
+}
+
+impl Csv {
+    fn read(path: &std::path::Path) -> Csv {
+        let text = std::fs::read_to_string(path).unwrap();
+        let mut lines = text.lines();
+        // Headers are quoted (a building name may hold a comma): split on `","`.
+        let h = lines.next().unwrap();
+        assert!(
+            h.starts_with('"') && h.ends_with('"'),
+            "unquoted header {h}"
+        );
+        let header: Vec<String> = h[1..h.len() - 1].split("\",\"").map(String::from).collect();
+        let rows: Vec<Vec<f64>> = lines
+            .map(|l| l.split(',').map(|x| x.parse::<f64>().unwrap()).collect())
+            .collect();
+        assert!(rows.iter().all(|r| r.len() == header.len()));
+        Csv { header, rows }
+    }
+    fn col(&self, name: &str) -> usize {
+        self.header
+            .iter()
+            .position(|h| h == name)
+            .unwrap_or_else(|| panic!("no column {name} in {:?}", self.header))
+    }
+}
+
+/// The history CSV: quoted headers, every quantity the README lists, and a state that is
+/// consistent with itself: drift and shear from the displacements, the contact force of
+/// the linear law, and the equilibrium accelerations equal to the time derivative of the
+/// velocities (central differences on equally spaced samples of a tight adaptive run).
+#[test]
+fn history_csv_is_consistent() {
+    let d = TempDir::new("histcsv");
+    let scene = d.write("free.toml", FREE_SCENE);
+    let (out, hist) = (d.path("run.json"), d.path("hist.csv"));
+    let o = pound(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--method",
+        "gap",
+        "--no-baseline",
+        "--history",
+        hist.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let c = Csv::read(&hist);
+    assert_eq!(c.header.len(), 2 + 5 * 5 + 1, "{:?}", c.header);
+    let (t, fc) = (c.col("time_s"), c.col("contact0_force_N"));
+    let (ul, ur) = (c.col("left_u2_m"), c.col("right, east_u2_m"));
+    let mut contact_samples = 0;
+    for r in &c.rows {
+        let delta = r[ul] - r[ur] - 0.01;
+        let law = if delta > 0.0 { 2e8 * delta } else { 0.0 };
+        assert!(
+            (r[fc] - law).abs() <= 1e-6 * 2e8 * 0.01,
+            "force {} vs k δ {law}",
+            r[fc]
+        );
+        contact_samples += (r[fc] > 0.0) as usize;
+    }
+    assert!(
+        contact_samples > 20,
+        "the contact carries force: {contact_samples} samples"
+    );
+    let (mut worst, mut scale): (f64, f64) = (0.0, 0.0);
+    for (b, n) in [("left", 3), ("right, east", 2)] {
+        let shears = (1..=n).map(|j| c.col(&format!("{b}_V{j}_N")));
+        for (j, iv_shear) in (1..=n).zip(shears) {
+            let (iu, idr) = (
+                c.col(&format!("{b}_u{j}_m")),
+                c.col(&format!("{b}_drift{j}_m")),
+            );
+            let (iv, ia) = (
+                c.col(&format!("{b}_v{j}_m_per_s")),
+                c.col(&format!("{b}_a{j}_abs_m_per_s2")),
+            );
+            let ground = c.col("ground_a_m_per_s2");
+            for w in c.rows.windows(3) {
+                let below = if j > 1 { w[1][iu - 1] } else { 0.0 };
+                let tol = 1e-9 * (w[1][iu].abs() + below.abs()) + 1e-300;
+                assert!((w[1][idr] - (w[1][iu] - below)).abs() <= tol);
+                let k = w[1][iv_shear] / w[1][idr];
+                if w[1][idr].abs() > 1e-4 {
+                    let k_expect = match (b, j) {
+                        ("left", 1) => 2.0e8,
+                        ("left", 2) => 1.5e8,
+                        ("left", _) => 1.0e8,
+                        (_, 1) => 3.0e8,
+                        _ => 2.0e8,
+                    };
+                    assert!(
+                        (k / k_expect - 1.0).abs() < 1e-8,
+                        "{b} story {j}: V/drift = {k}"
+                    );
+                }
+                let (h0, h1) = (w[1][t] - w[0][t], w[2][t] - w[1][t]);
+                if (h0 - h1).abs() > 1e-12 {
+                    continue;
+                }
+                let fd = (w[2][iv] - w[0][iv]) / (h0 + h1);
+                worst = worst.max((fd - (w[1][ia] - w[1][ground])).abs());
+                scale = scale.max(w[1][ia].abs());
+            }
+        }
+    }
+    assert!(scale > 1.0, "accelerations of order m/s²: {scale}");
+    // Second-order differences at h = 1 ms: observed 7e-4 of the largest acceleration; a
+    // wrong damping term, sign or missing contact force is of order 1.
+    assert!(
+        worst < 2e-3 * scale,
+        "equilibrium vs d/dt of velocity: {worst} of {scale}"
+    );
+}
+
+/// The momentum method's history: the holding force of a persistent contact (c_r = 0)
+/// is positive while the floors are held (δ = 0), zero in free flight.
+#[test]
+fn momentum_history_has_holding_forces() {
+    let d = TempDir::new("histmom");
+    let scene = d.write("free.toml", FREE_SCENE);
+    let (out, hist) = (d.path("run.json"), d.path("hist.csv"));
+    let o = pound(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--method",
+        "momentum",
+        "--set",
+        "contacts.0.restitution=0",
+        "--no-baseline",
+        "--history",
+        hist.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let c = Csv::read(&hist);
+    let (fc, ul, ur) = (
+        c.col("contact0_force_N"),
+        c.col("left_u2_m"),
+        c.col("right, east_u2_m"),
+    );
+    let held: Vec<&Vec<f64>> = c.rows.iter().filter(|r| r[fc] != 0.0).collect();
+    assert!(!held.is_empty(), "a persistent phase carries force");
+    for r in &c.rows {
+        let delta = r[ul] - r[ur] - 0.01;
+        assert!(delta <= 1e-9, "no penetration: {delta}");
+        if r[fc] != 0.0 {
+            assert!(
+                r[fc] > 0.0 && delta.abs() <= 1e-9,
+                "held: F = {}, δ = {delta}",
+                r[fc]
+            );
+        }
+    }
+}
+
+fn strip_nulls(v: &mut serde_json::Value) {
+    match v {
+        serde_json::Value::Object(m) => {
+            m.retain(|_, x| !x.is_null());
+            m.values_mut().for_each(strip_nulls);
+        }
+        serde_json::Value::Array(a) => a.iter_mut().for_each(strip_nulls),
+        _ => {}
+    }
+}
+
+/// `resolved_scene` is the scene that was run: written back as a scene file (TOML, without
+/// its nulls) and run with no overrides, it gives bit-identical peaks.
+#[test]
+fn resolved_scene_reruns_the_same_analysis() {
+    let d = TempDir::new("resolved");
+    let (a, b) = (d.path("a.json"), d.path("b.json"));
+    let o = pound(&[
+        "run",
+        &scene(),
+        "--method",
+        "momentum",
+        "--set",
+        "contacts.0.gap=0.05",
+        "--set",
+        "momentum.modes=10",
+        "--set",
+        "ground_motion.pga=0.3",
+        "--set",
+        "analysis.duration=8",
+        "--no-baseline",
+        "--out",
+        a.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let va: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&a).unwrap()).unwrap();
+    let mut rs = va["resolved_scene"].clone();
+    assert_eq!(rs["contacts"][0]["gap"], 0.05);
+    assert_eq!(rs["momentum"]["modes"], 10);
+    assert_eq!(rs["ground_motion"]["pga"], 0.3);
+    assert_eq!(rs["analysis"]["duration"], 8.0);
+    assert_eq!(
+        rs["gap_element"]["stiffness"], 1e10,
+        "defaults are spelled out"
+    );
+    assert!(std::path::Path::new(rs["ground_motion"]["file"].as_str().unwrap()).is_absolute());
+    assert!(va["scene_file"].as_str().unwrap().ends_with("scene.toml"));
+    strip_nulls(&mut rs);
+    let toml = toml::to_string(&rs).unwrap();
+    let again = d.write("again.toml", &toml);
+    let o = pound(&[
+        "run",
+        again.to_str().unwrap(),
+        "--method",
+        "momentum",
+        "--no-baseline",
+        "--out",
+        b.to_str().unwrap(),
+    ]);
+    assert!(
+        o.status.success(),
+        "{}\n{toml}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let vb: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&b).unwrap()).unwrap();
+    assert_eq!(va["buildings"], vb["buildings"]);
+    assert_eq!(va["impacts"], vb["impacts"]);
+}

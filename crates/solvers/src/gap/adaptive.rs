@@ -110,6 +110,31 @@ fn rhs(sys: &System, seg: &Segment, modes: &[Mode], t: f64, y: &[f64], o: &mut [
     extra[2] = pc;
 }
 
+/// Observes the state `y` for peaks and, when a history is kept, for its next sample (with
+/// the contact forces of the closed contacts).
+fn observe(sys: &System, tracker: &mut ResponseTracker, modes: &[Mode], y: &[f64], history: bool) {
+    let n = sys.n;
+    if !history {
+        sys.observe(tracker, &y[..n]);
+        return;
+    }
+    let (u, v) = (&y[..n], &y[n..2 * n]);
+    let forces: Vec<f64> = sys
+        .contacts
+        .iter()
+        .zip(modes)
+        .map(|(c, m)| {
+            if m.closed {
+                c.law
+                    .force(u[c.l] - u[c.r] - c.gap, v[c.l] - v[c.r], m.v_close)
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    sys.observe_sample(tracker, u, v, &forces);
+}
+
 /// δ, δ̇, δ̈ of contact `c` on the dense output.
 #[inline]
 fn kin(dp: &Dopri5, n: usize, l: usize, r: usize, gap: f64, th: f64) -> (f64, f64) {
@@ -181,7 +206,7 @@ pub(crate) fn run(
     let initial = sys.mech_energy(&y[..n], &y[n..2 * n]) + stored0;
 
     let mut tracker = ResponseTracker::new(scene);
-    sys.observe(&mut tracker, &y[..n]);
+    observe(sys, &mut tracker, &modes, &y, history.is_some());
     tracker.sample(0.0, history.as_deref_mut());
 
     let n_int = sys.n_intervals(duration);
@@ -405,7 +430,7 @@ pub(crate) fn run(
                 stats.events += 1;
                 rhs(sys, &seg, &modes, t, &y, &mut dp.k[0]);
                 stats.rhs_evaluations += 1;
-                sys.observe(&mut tracker, &y[..n]);
+                observe(sys, &mut tracker, &modes, &y, history.is_some());
                 if !(land && t == t_bp) {
                     tracker.sample(t, history.as_deref_mut());
                 }
@@ -423,7 +448,7 @@ pub(crate) fn run(
         stats.steps += 1;
         h = hnew;
         if land && t == t_bp {
-            sys.observe(&mut tracker, &y[..n]);
+            observe(sys, &mut tracker, &modes, &y, history.is_some());
             tracker.sample(t, history.as_deref_mut());
             interval += 1;
             if interval < n_int {

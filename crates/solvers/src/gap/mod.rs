@@ -321,6 +321,22 @@ impl System {
         }
     }
 
+    /// Observes every building's floor displacements and velocities and the contact forces
+    /// (N, compressive > 0) for a history sample.
+    pub fn observe_sample(
+        &self,
+        tracker: &mut crate::response::ResponseTracker,
+        u: &[f64],
+        v: &[f64],
+        forces: &[f64],
+    ) {
+        for (bi, b) in self.blocks.iter().enumerate() {
+            tracker.observe(bi, &u[b.off..b.off + b.len]);
+            tracker.observe_velocity(bi, &v[b.off..b.off + b.len]);
+        }
+        tracker.observe_contact_forces(forces);
+    }
+
     /// Settings in words.
     pub fn settings(&self, scene: &Scene) -> String {
         let g = &scene.gap_element;

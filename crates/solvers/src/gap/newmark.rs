@@ -178,7 +178,7 @@ pub(crate) fn run(
     }
 
     let mut tracker = ResponseTracker::new(scene);
-    sys.observe(&mut tracker, &u);
+    sys.observe_sample(&mut tracker, &u, &v, &force);
     tracker.sample(0.0, history.as_deref_mut());
 
     let (mut e_in, mut e_damp, mut e_work) = (0.0, 0.0, 0.0);
@@ -422,7 +422,11 @@ pub(crate) fn run(
         stats.steps += 1;
         // Peaks at every step, as a finite-element program reports them (not continuous
         // maxima: between steps Newmark has no interpolant of its own accuracy).
-        sys.observe(&mut tracker, &u);
+        if history.is_some() {
+            sys.observe_sample(&mut tracker, &u, &v, &force);
+        } else {
+            sys.observe(&mut tracker, &u);
+        }
         tracker.sample(t1, history.as_deref_mut());
     }
 

@@ -272,6 +272,9 @@ pub struct Stepper<'a> {
     shear_rows: Vec<Vec<f64>>,
     /// Scratch: the coefficients of one response quantity.
     coef: Vec<f64>,
+    /// Contact forces of the segment being integrated, N, one per scene contact: the
+    /// holding forces of held contacts, 0 otherwise (history output).
+    held_force: Vec<f64>,
 }
 
 impl<'a> Stepper<'a> {
@@ -361,6 +364,7 @@ impl<'a> Stepper<'a> {
                 .map(|b| vec![0.0; b.n_floors])
                 .collect(),
             interval: peaks::Interval::default(),
+            held_force: vec![0.0; p.contacts.len()],
             coef: vec![
                 0.0;
                 p.modal
@@ -484,9 +488,11 @@ impl<'a> Stepper<'a> {
             self.ud_prev[b].copy_from_slice(&self.ud[b]);
             if self.history.is_some() {
                 self.tracker.observe(b, u);
+                self.tracker.observe_velocity(b, &self.ud[b]);
             }
         }
         if self.history.is_some() {
+            self.tracker.observe_contact_forces(&self.held_force);
             self.tracker.sample(self.s.t, self.history.as_deref_mut());
         }
     }
@@ -931,7 +937,7 @@ impl<'a> Stepper<'a> {
         &self,
         set: &[usize],
         s: f64,
-    ) -> Result<(Vec<f64>, Vec<f64>, Vec<f64>), SolverError> {
+    ) -> Result<(Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>), SolverError> {
         let (p, m) = (self.p, &self.p.modal);
         let (a0, a1) = (
             p.ground(self.s.j, self.s.t),
@@ -964,14 +970,14 @@ impl<'a> Stepper<'a> {
         for n in 0..m.len() {
             (x[n], v[n]) = arc(n, fc[n]).xv(s);
         }
-        Ok((fc, x, v))
+        Ok((fc, x, v, lam))
     }
 
     /// Smallest holding force (relative to its tolerance) at the end of the held trial of
     /// length s, and the contact (index into `set`) it belongs to.
     fn held_end_force(&self, set: &[usize], s: f64) -> Result<(f64, usize), SolverError> {
         let (x, v) = if s > 0.0 {
-            let (_, x, v) = self.held_trial(set, s)?;
+            let (_, x, v, _) = self.held_trial(set, s)?;
             (x, v)
         } else {
             (self.s.x.clone(), self.s.v.clone())
@@ -1062,10 +1068,15 @@ impl<'a> Stepper<'a> {
                 return Ok(self.release(c));
             }
         }
-        let (fc, _, _) = self.held_trial(&set, s_hold)?;
+        let (fc, _, _, lam) = self.held_trial(&set, s_hold)?;
         let full = s_hold == tau;
         let t_stop = if full { t_end } else { self.s.t + s_hold };
-        let step = self.segment(s_hold, t_stop, Some(&fc), full)?;
+        for (&c, &l) in set.iter().zip(&lam) {
+            self.held_force[c] = l;
+        }
+        let step = self.segment(s_hold, t_stop, Some(&fc), full);
+        self.held_force.fill(0.0);
+        let step = step?;
         self.project_held(&set)?;
         match (step, release) {
             (Step::Reached, Some(c)) => Ok(self.release(c)),
