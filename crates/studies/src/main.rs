@@ -1,7 +1,9 @@
 //! `pound`: seismic pounding of adjacent buildings, two ways.
 //!
 //! Exit codes: 0 success; 2 bad input (scene, record, arguments); 3 a solver could not go on;
-//! 1 anything else (for example an output file that cannot be written).
+//! 4 a study sweep finished but some of its cases failed (each study's `summary.md` names
+//! them; tables and figures are written from the cases that finished); 1 anything else (for
+//! example an output file that cannot be written).
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -443,6 +445,7 @@ fn studies_command(command: StudiesCommand) -> Result<()> {
             };
             let t0 = std::time::Instant::now();
             let mut timings = serde_json::Map::new();
+            let mut unexpected = Vec::new();
             for n in &names {
                 let r = st::run_study(n, &cfg).map_err(|e| match e {
                     // A definition or scene the study cannot use is bad input (exit 2).
@@ -466,6 +469,7 @@ fn studies_command(command: StudiesCommand) -> Result<()> {
                         " (shard: case files only)".into()
                     }
                 );
+                unexpected.extend(r.unexpected.iter().map(|u| format!("{n}: {u}")));
                 timings.insert(
                     n.clone(),
                     serde_json::json!({
@@ -488,6 +492,7 @@ fn studies_command(command: StudiesCommand) -> Result<()> {
                 io::write_json(&out.join("timing.json"), &doc)?;
             }
             eprintln!("total wall time {total:.1} s");
+            failed_cases(&unexpected)?;
         }
         StudiesCommand::Merge {
             dirs,
@@ -495,11 +500,25 @@ fn studies_command(command: StudiesCommand) -> Result<()> {
             studies_dir,
         } => {
             let out = out.unwrap_or_else(|| dirs[0].clone());
-            let merged = st::merge(&dirs, &out, &studies_dir)?;
+            let (merged, unexpected) = st::merge(&dirs, &out, &studies_dir)?;
             eprintln!("merged {} into {}", merged.join(", "), out.display());
+            failed_cases(&unexpected)?;
         }
     }
     Ok(())
+}
+
+/// Cases of a sweep that did not finish as defined (exit code 4).
+#[derive(Debug, thiserror::Error)]
+#[error("{} case(s) failed (listed in each study's summary.md):\n  {}", .0.len(), .0.join("\n  "))]
+struct FailedCases(Vec<String>);
+
+fn failed_cases(unexpected: &[String]) -> Result<()> {
+    if unexpected.is_empty() {
+        Ok(())
+    } else {
+        Err(FailedCases(unexpected.to_vec()).into())
+    }
 }
 
 fn main() -> ExitCode {
@@ -516,6 +535,8 @@ fn main() -> ExitCode {
             });
             if e.downcast_ref::<InputError>().is_some() || refused {
                 ExitCode::from(2)
+            } else if e.downcast_ref::<FailedCases>().is_some() {
+                ExitCode::from(4)
             } else if e
                 .chain()
                 .any(|c| c.downcast_ref::<solvers::SolverError>().is_some())

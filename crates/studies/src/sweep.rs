@@ -78,6 +78,10 @@ pub struct CaseSpec {
     pub repeat: u32,
     /// Labels for tables; not part of the id.
     pub params: BTreeMap<String, serde_json::Value>,
+    /// The solver error this case exists to show (e.g. `Stalled`: a study of where a
+    /// method fails); such a failure is a result, not a failed sweep. Not part of the id.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub expect_failure: Option<String>,
 }
 
 impl CaseSpec {
@@ -93,6 +97,7 @@ impl CaseSpec {
             history: false,
             repeat: 1,
             params: BTreeMap::new(),
+            expect_failure: None,
         };
         c.compute_id();
         c
@@ -131,6 +136,12 @@ impl CaseSpec {
     pub fn repeat(mut self, n: u32) -> Self {
         self.repeat = n.max(1);
         self.compute_id();
+        self
+    }
+
+    /// Marks the case as one that exists to show the solver error `kind`.
+    pub fn expect_failure(mut self, kind: &str) -> Self {
+        self.expect_failure = Some(kind.to_string());
         self
     }
 
@@ -189,6 +200,12 @@ impl CaseSpec {
         });
         b.params = BTreeMap::new();
         b.params.insert("baseline".into(), true.into());
+        b.params
+            .insert("variant".into(), "baseline without contact".into());
+        if let Some(r) = self.params.get("record") {
+            b.params.insert("record".into(), r.clone());
+        }
+        b.expect_failure = None;
         b.repeat = 1;
         b = b.with("contacts.0.gap", "1000.0").history(true);
         b
@@ -233,6 +250,13 @@ pub struct ContactHistory {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CaseOutputs {
     pub settings: String,
+    /// Building names, as in the scene.
+    #[serde(default)]
+    pub buildings: Vec<String>,
+    /// Per building: the floor (from 1) where contact 0 meets it, if it does. The story
+    /// below that floor is the "contact story" the studies report.
+    #[serde(default)]
+    pub contact_floor: Vec<Option<usize>>,
     /// Peak |story shear|, N, per building, story 1 first.
     pub story_shear_max: Vec<Vec<f64>>,
     /// Peak |floor displacement|, m, per building, floor 1 first.
@@ -289,6 +313,17 @@ pub struct CaseResult {
 impl CaseResult {
     pub fn ok(&self) -> Option<&CaseOutputs> {
         self.outputs.as_ref()
+    }
+
+    /// Whether the outcome is not the one the case was defined for: a failure of a case
+    /// not marked [`CaseSpec::expect_failure`] (or failing with another error), or a case
+    /// marked so that finished.
+    pub fn unexpected(&self) -> bool {
+        match (&self.spec.expect_failure, self.status.as_str()) {
+            (None, status) => status != "ok",
+            (Some(_), "ok") => true,
+            (Some(kind), _) => self.error_kind.as_deref() != Some(kind.as_str()),
+        }
     }
 }
 
@@ -400,6 +435,20 @@ pub fn run_case(spec: &CaseSpec, studies_dir: &Path) -> CaseResult {
     }
     let outputs = CaseOutputs {
         settings: run.settings.clone(),
+        buildings: run.buildings.iter().map(|b| b.name.clone()).collect(),
+        contact_floor: (0..scene.buildings.len())
+            .map(|b| {
+                scene.contacts.first().and_then(|c| {
+                    if c.left == b {
+                        Some(c.left_dof + 1)
+                    } else if c.right == b {
+                        Some(c.right_dof + 1)
+                    } else {
+                        None
+                    }
+                })
+            })
+            .collect(),
         story_shear_max: run
             .buildings
             .iter()
@@ -694,8 +743,48 @@ impl Results {
     }
 }
 
-/// Writes `cases.json` (all results, without histories) and `cases.csv` (one row per case:
-/// parameters, status, scalar outputs, story shears, wall time).
+/// Columns of `cases.csv` after the parameters: (name, value of a finished case).
+type Column = (&'static str, fn(&CaseOutputs) -> String);
+
+fn opt_e(v: Option<f64>) -> String {
+    v.map(|x| format!("{x:e}")).unwrap_or_default()
+}
+
+const OUTPUT_COLUMNS: [Column; 17] = [
+    ("impacts", |o| o.impacts.to_string()),
+    ("persistent_contacts", |o| o.persistent_contacts.to_string()),
+    ("restitution_mean", |o| opt_e(o.restitution_mean)),
+    ("restitution_min", |o| opt_e(o.restitution_min)),
+    ("restitution_max", |o| opt_e(o.restitution_max)),
+    ("restitution_undefined", |o| {
+        o.restitution_undefined.to_string()
+    }),
+    ("max_penetration_m", |o| opt_e(o.max_penetration)),
+    ("peak_closure_m", |o| opt_e(o.peak_closure)),
+    ("energy_input_J", |o| format!("{:e}", o.energy_input)),
+    ("energy_contact_J", |o| format!("{:e}", o.energy_contact)),
+    ("energy_balance_error_J", |o| {
+        format!("{:e}", o.energy_balance_error)
+    }),
+    ("steps", |o| o.steps.to_string()),
+    ("rejected_steps", |o| o.rejected_steps.to_string()),
+    ("rhs_evaluations", |o| o.rhs_evaluations.to_string()),
+    ("events", |o| o.events.to_string()),
+    ("newton_iterations", |o| o.newton_iterations.to_string()),
+    ("settings", |o| o.settings.clone()),
+];
+
+/// Writes the study's data tables (tidy: one column per variable, one name each, units as
+/// suffixes, the same columns whether cases finish or fail):
+/// - `cases.json`: every result without histories;
+/// - `cases.csv`: one row per case: `case_id`, `method`, `variant`, `record` (label),
+///   `record_file`, `pga_g`, the study's other parameters, `baseline`, `overrides`,
+///   `expected_failure`, `status`, `error_kind`, `error`, the scalar outputs, `wall_s`;
+/// - `peaks.csv`: one row per finished case, building and story: `case_id`, `building`
+///   (as named in the scene), `story` (from 1; floor `story` is its top),
+///   `story_shear_max_N`, `floor_displacement_max_m` (of floor `story`) and
+///   `amplification` (peak story shear over that of the case's run without contact,
+///   when the study ran it).
 pub fn write_cases_table(study_dir: &Path, results: &Results) -> Result<()> {
     let rows: Vec<serde_json::Value> = results
         .iter()
@@ -709,106 +798,68 @@ pub fn write_cases_table(study_dir: &Path, results: &Results) -> Result<()> {
         .collect();
     write_json(&study_dir.join("cases.json"), &rows)?;
 
+    const FIXED: [&str; 3] = ["variant", "record", "baseline"];
     let mut param_keys: Vec<String> = results
         .iter()
         .flat_map(|r| r.spec.params.keys().cloned())
+        .filter(|k| !FIXED.contains(&k.as_str()))
         .collect();
     param_keys.sort();
     param_keys.dedup();
-    let shape: Vec<usize> = results
-        .iter()
-        .find_map(|r| {
-            r.ok()
-                .map(|o| o.story_shear_max.iter().map(|v| v.len()).collect())
-        })
-        .unwrap_or_default();
+    let csv_err = |e: csv::Error| StudyError::Other(format!("cases.csv: {e}"));
     let mut w = csv::Writer::from_writer(Vec::new());
-    let mut header: Vec<String> = vec!["id".into(), "method".into(), "record".into()];
+    let mut header: Vec<String> = [
+        "case_id",
+        "method",
+        "variant",
+        "record",
+        "record_file",
+        "pga_g",
+    ]
+    .map(String::from)
+    .to_vec();
     header.extend(param_keys.iter().cloned());
     header.extend(
         [
-            "set",
+            "baseline",
+            "overrides",
+            "expected_failure",
             "status",
             "error_kind",
             "error",
-            "impacts",
-            "persistent_contacts",
-            "restitution_mean",
-            "restitution_min",
-            "max_penetration_m",
-            "peak_closure_m",
-            "energy_input_J",
-            "energy_contact_J",
-            "energy_balance_error_J",
-            "steps",
-            "rejected_steps",
-            "rhs_evaluations",
-            "events",
-            "newton_iterations",
         ]
         .map(String::from),
     );
-    for (b, n) in shape.iter().enumerate() {
-        for j in 1..=*n {
-            header.push(format!("b{}_V{j}_N", b + 1));
-        }
-    }
-    header.push("wall_seconds".into());
-    let csv_err = |e: csv::Error| StudyError::Other(format!("cases.csv: {e}"));
+    header.extend(OUTPUT_COLUMNS.iter().map(|(n, _)| n.to_string()));
+    header.push("wall_s".into());
     w.write_record(&header).map_err(csv_err)?;
-    let opt = |v: Option<f64>| v.map(|x| format!("{x:e}")).unwrap_or_default();
+    let param = |r: &CaseResult, k: &str| match r.spec.params.get(k) {
+        None => String::new(),
+        Some(serde_json::Value::String(v)) => v.clone(),
+        Some(v) => v.to_string(),
+    };
     for r in results.iter() {
         let s = &r.spec;
         let mut row = vec![
             s.id.clone(),
             s.method.to_string(),
+            param(r, "variant"),
+            param(r, "record"),
             s.record.clone().unwrap_or_default(),
+            s.pga.map(|p| p.to_string()).unwrap_or_default(),
         ];
-        for k in &param_keys {
-            row.push(match s.params.get(k) {
-                None => String::new(),
-                Some(serde_json::Value::String(v)) => v.clone(),
-                Some(v) => v.to_string(),
-            });
-        }
-        row.push(s.set.join(";"));
-        row.push(r.status.clone());
-        row.push(r.error_kind.clone().unwrap_or_default());
-        row.push(r.error.clone().unwrap_or_default());
+        row.extend(param_keys.iter().map(|k| param(r, k)));
+        row.extend([
+            s.params.contains_key("baseline").to_string(),
+            s.set.join(";"),
+            s.expect_failure.clone().unwrap_or_default(),
+            r.status.clone(),
+            r.error_kind.clone().unwrap_or_default(),
+            r.error.clone().unwrap_or_default(),
+        ]);
         match r.ok() {
-            Some(o) => {
-                row.extend([
-                    o.impacts.to_string(),
-                    o.persistent_contacts.to_string(),
-                    opt(o.restitution_mean),
-                    opt(o.restitution_min),
-                    opt(o.max_penetration),
-                    opt(o.peak_closure),
-                    format!("{:e}", o.energy_input),
-                    format!("{:e}", o.energy_contact),
-                    format!("{:e}", o.energy_balance_error),
-                    o.steps.to_string(),
-                    o.rejected_steps.to_string(),
-                    o.rhs_evaluations.to_string(),
-                    o.events.to_string(),
-                    o.newton_iterations.to_string(),
-                ]);
-                for (b, n) in shape.iter().enumerate() {
-                    for j in 0..*n {
-                        row.push(
-                            o.story_shear_max
-                                .get(b)
-                                .and_then(|v| v.get(j))
-                                .map(|x| format!("{x:e}"))
-                                .unwrap_or_default(),
-                        );
-                    }
-                }
-            }
-            None => row.extend(std::iter::repeat_n(
-                String::new(),
-                14 + shape.iter().sum::<usize>(),
-            )),
+            Some(o) => row.extend(OUTPUT_COLUMNS.iter().map(|(_, f)| f(o))),
+            None => row.extend(OUTPUT_COLUMNS.iter().map(|_| String::new())),
         }
         row.push(format!("{:.6e}", r.wall_seconds));
         w.write_record(&row).map_err(csv_err)?;
@@ -817,5 +868,53 @@ pub fn write_cases_table(study_dir: &Path, results: &Results) -> Result<()> {
         .into_inner()
         .map_err(|e| StudyError::Other(format!("cases.csv: {e}")))?;
     write_atomic(&study_dir.join("cases.csv"), &bytes)?;
+
+    let peaks_err = |e: csv::Error| StudyError::Other(format!("peaks.csv: {e}"));
+    let mut w = csv::Writer::from_writer(Vec::new());
+    w.write_record([
+        "case_id",
+        "building",
+        "story",
+        "story_shear_max_N",
+        "floor_displacement_max_m",
+        "amplification",
+    ])
+    .map_err(peaks_err)?;
+    for r in results.iter() {
+        let Some(o) = r.ok() else { continue };
+        let base = (!r.spec.params.contains_key("baseline"))
+            .then(|| results.map.get(&r.spec.baseline().id).and_then(|b| b.ok()))
+            .flatten();
+        for (b, shears) in o.story_shear_max.iter().enumerate() {
+            let name = o
+                .buildings
+                .get(b)
+                .cloned()
+                .unwrap_or_else(|| format!("building{}", b + 1));
+            for (j, v) in shears.iter().enumerate() {
+                let amp = base
+                    .and_then(|bo| bo.story_shear_max.get(b).and_then(|x| x.get(j)))
+                    .map(|v0| format!("{:e}", v / v0))
+                    .unwrap_or_default();
+                w.write_record([
+                    r.spec.id.clone(),
+                    name.clone(),
+                    (j + 1).to_string(),
+                    format!("{v:e}"),
+                    o.floor_displacement_max
+                        .get(b)
+                        .and_then(|x| x.get(j))
+                        .map(|x| format!("{x:e}"))
+                        .unwrap_or_default(),
+                    amp,
+                ])
+                .map_err(peaks_err)?;
+            }
+        }
+    }
+    let bytes = w
+        .into_inner()
+        .map_err(|e| StudyError::Other(format!("peaks.csv: {e}")))?;
+    write_atomic(&study_dir.join("peaks.csv"), &bytes)?;
     Ok(())
 }

@@ -162,3 +162,91 @@ fn case_ids_are_stable() {
     assert_eq!(a.id.len(), 16);
     assert_ne!(a.id, a.clone().with("a", 3).id);
 }
+
+fn csv_header(path: &std::path::Path) -> Vec<String> {
+    let text = std::fs::read_to_string(path).unwrap();
+    text.lines()
+        .next()
+        .unwrap()
+        .split(',')
+        .map(String::from)
+        .collect()
+}
+
+/// The data tables are tidy: one name per column, the same columns whether the cases
+/// finish or all fail, and the per-story peaks in a long table with the buildings' names
+/// and the amplification over the case's run without contact.
+#[test]
+fn data_tables_are_tidy() {
+    let (ok_dir, bad_dir) = (tmp("tidy_ok"), tmp("tidy_bad"));
+    let base = CaseSpec::new("paper/scene.toml", solvers::Method::Momentum)
+        .with("analysis.duration", "6.0")
+        .param("variant", "momentum")
+        .param("record", "CAP000")
+        .param("gap_m", 0.1);
+    let bad = base.clone().with("contacts.0.restitution", "1.5");
+    let run = |dir: &std::path::PathBuf, specs: Vec<CaseSpec>| {
+        let opts = EngineOptions {
+            study_dir: dir.clone(),
+            studies_dir: studies_dir(),
+            threads: Some(2),
+            shard: None,
+            progress: false,
+            fresh: true,
+        };
+        run_cases(&specs, &opts).unwrap();
+        let res = studies::sweep::collect("t", &specs, dir).unwrap();
+        studies::sweep::write_cases_table(dir, &res).unwrap();
+    };
+    run(&ok_dir, vec![base.clone(), base.baseline()]);
+    run(&bad_dir, vec![bad]);
+    let (h_ok, h_bad) = (
+        csv_header(&ok_dir.join("cases.csv")),
+        csv_header(&bad_dir.join("cases.csv")),
+    );
+    assert_eq!(h_ok, h_bad, "the schema does not depend on success");
+    let mut unique = h_ok.clone();
+    unique.sort();
+    unique.dedup();
+    assert_eq!(unique.len(), h_ok.len(), "one name per column: {h_ok:?}");
+    for dimensional in [
+        "peak_closure_m",
+        "energy_input_J",
+        "wall_s",
+        "pga_g",
+        "gap_m",
+    ] {
+        assert!(
+            h_ok.iter().any(|h| h == dimensional),
+            "{dimensional} in {h_ok:?}"
+        );
+    }
+    assert_eq!(
+        csv_header(&ok_dir.join("peaks.csv")),
+        [
+            "case_id",
+            "building",
+            "story",
+            "story_shear_max_N",
+            "floor_displacement_max_m",
+            "amplification"
+        ]
+    );
+    let peaks = std::fs::read_to_string(ok_dir.join("peaks.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = peaks
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    // 2 cases × 2 buildings × 15 stories; the baseline has no amplification of its own.
+    assert_eq!(rows.len(), 60);
+    let with: Vec<&Vec<&str>> = rows.iter().filter(|r| r[0] == base.id).collect();
+    assert_eq!(with.len(), 30);
+    assert!(with.iter().any(|r| r[1] == "building2" && r[2] == "15"));
+    for r in &with {
+        let a: f64 = r[5].parse().unwrap();
+        assert!(a > 0.5 && a.is_finite(), "amplification {a}");
+    }
+    let failed = std::fs::read_to_string(bad_dir.join("peaks.csv")).unwrap();
+    assert_eq!(failed.lines().count(), 1, "failed cases have no peak rows");
+}

@@ -5,7 +5,8 @@ use serde::Deserialize;
 use solvers::Method;
 
 use super::{
-    amp_top, default_pga, default_records, failures_note, record_label, write_summary, Ctx, Study,
+    amp_contact, contact_floor_displacement, default_pga, default_records, failures_note,
+    record_label, write_summary, Ctx, Study,
 };
 use crate::plot::{figure, Marker, Panel, PanelKind, Series, VLine};
 use crate::sweep::{CaseSpec, Result, Results, StudyError};
@@ -104,7 +105,7 @@ impl Study for Gap {
             ],
         );
         let mut sep = Table::new(
-            &format!("Separation needed (cm): exact = peak of u1 − u2 without contact; Δ = peak top displacement without contact; DDC with ρ = {rho:.4} (CQC, ζ = {}, ω1/ω2 = {r:.4})", d.damping),
+            &format!("Separation needed (cm): exact = peak of u1 − u2 without contact; Δ = peak contact-floor displacement without contact; DDC with ρ = {rho:.4} (CQC, ζ = {}, ω1/ω2 = {r:.4})", d.damping),
             &["record", "Δ1", "Δ2", "exact", "DDC", "SRSS", "ABS"],
         );
         let mut panels = Vec::new();
@@ -116,10 +117,10 @@ impl Study for Gap {
             for &g in &gs {
                 let (m, e) = (mom(ctx, &d, rec, g), gel(ctx, &d, rec, g));
                 let vals = [
-                    amp_top(res, &m, 0),
-                    amp_top(res, &m, 1),
-                    amp_top(res, &e, 0),
-                    amp_top(res, &e, 1),
+                    amp_contact(res, &m, 0),
+                    amp_contact(res, &m, 1),
+                    amp_contact(res, &e, 0),
+                    amp_contact(res, &e, 1),
                 ];
                 for (k, v) in vals.iter().enumerate() {
                     if let Some(v) = v {
@@ -141,14 +142,8 @@ impl Study for Gap {
             let base = res.out(&mom(ctx, &d, rec, gs[0]).baseline());
             let mut vlines = Vec::new();
             if let Some(b) = base {
-                let d1 = b.floor_displacement_max[0]
-                    .last()
-                    .copied()
-                    .unwrap_or(f64::NAN);
-                let d2 = b.floor_displacement_max[1]
-                    .last()
-                    .copied()
-                    .unwrap_or(f64::NAN);
+                let d1 = contact_floor_displacement(b, 0).unwrap_or(f64::NAN);
+                let d2 = contact_floor_displacement(b, 1).unwrap_or(f64::NAN);
                 let exact = b.peak_closure.unwrap_or(f64::NAN);
                 let abs = d1 + d2;
                 let srss = (d1 * d1 + d2 * d2).sqrt();
@@ -180,13 +175,13 @@ impl Study for Gap {
                     abs * 100.0
                 ));
             }
-            let at = |g: f64, b| amp_top(res, &mom(ctx, &d, rec, g), b);
+            let at = |g: f64, b| amp_contact(res, &mom(ctx, &d, rec, g), b);
             let has = |g: f64| gs.iter().any(|x| (x - g).abs() < 1e-9);
             if has(0.05) && has(0.10) {
                 let (a5, a10) = (at(0.05, 1), at(0.10, 1));
                 let (b5, b10) = (at(0.05, 0), at(0.10, 0));
                 tests.push(format!(
-                    "{lab}: 5 cm vs 10 cm top-story amplification {} vs {} (building 1), {} vs {} (building 2)",
+                    "{lab}: 5 cm vs 10 cm contact-story amplification {} vs {} (building 1), {} vs {} (building 2)",
                     f(b5, 2), f(b10, 2), f(a5, 2), f(a10, 2)
                 ));
             }
@@ -203,7 +198,7 @@ impl Study for Gap {
                 Marker::Square,
             ];
             panels.push(PanelKind::Xy(Panel {
-                title: format!("{lab}: top-story amplification"),
+                title: format!("{lab}: contact-story amplification"),
                 x_label: "gap (cm)".into(),
                 y_label: "amplification factor".into(),
                 series: series
@@ -237,7 +232,7 @@ impl Study for Gap {
         let mut small_lower = 0;
         let mut n = 0;
         for rec in &recs {
-            let at = |g: f64, b| amp_top(res, &mom(ctx, &d, rec, g), b);
+            let at = |g: f64, b| amp_contact(res, &mom(ctx, &d, rec, g), b);
             if let (Some(a5), Some(a10)) = (at(0.05, 1), at(0.10, 1)) {
                 n += 1;
                 if a5 > a10 {
@@ -255,7 +250,7 @@ impl Study for Gap {
         }
         if n > 0 {
             reading.push(format!(
-                "Paper's statements (momentum method, building 2, top story): a 5 cm gap gives a larger amplification than 10 cm for {worse5} of {n} records; some gap below 5 cm gives a smaller amplification than 5 cm for {small_lower} of {n} records. {}.",
+                "Paper's statements (momentum method, building 2, contact story): a 5 cm gap gives a larger amplification than 10 cm for {worse5} of {n} records; some gap below 5 cm gives a smaller amplification than 5 cm for {small_lower} of {n} records. {}.",
                 tests.join("; ")
             ));
         }

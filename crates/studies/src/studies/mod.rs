@@ -26,8 +26,8 @@ use solvers::Method;
 
 use crate::io::{write_atomic, write_json};
 use crate::sweep::{
-    collect, dedup, run_cases, write_cases_table, CaseOutputs, CaseSpec, EngineOptions, Result,
-    Results, RunSummary, Shard, StudyError,
+    collect, dedup, run_cases, write_cases_table, CaseOutputs, CaseResult, CaseSpec, EngineOptions,
+    Result, Results, RunSummary, Shard, StudyError,
 };
 use crate::table::Table;
 
@@ -166,6 +166,9 @@ pub struct StudyRun {
     /// Tables and figures written (false for a shard).
     pub reported: bool,
     pub wall_seconds: f64,
+    /// Cases whose outcome was not the one they were defined for (failed cases, except
+    /// those that exist to show a solver error), as `id: variant, record: error`.
+    pub unexpected: Vec<String>,
 }
 
 fn make_ctx(
@@ -211,6 +214,21 @@ pub fn all_cases(st: &dyn Study, ctx: &Ctx) -> Result<Vec<CaseSpec>> {
                     first.scene,
                     scene.buildings.len(),
                     scene.contacts.len()
+                ),
+            });
+        }
+        let c = &scene.contacts[0];
+        let mut pair = [c.left, c.right];
+        pair.sort();
+        if pair != [0, 1] {
+            return Err(StudyError::Definition {
+                file: ctx.def_file.clone(),
+                message: format!(
+                    "study `{}` reports buildings 1 and 2 at contact 0, which in `{}` joins buildings {} and {} (counted from 1): list the pair first",
+                    ctx.name,
+                    first.scene,
+                    c.left + 1,
+                    c.right + 1
                 ),
             });
         }
@@ -263,28 +281,101 @@ pub fn run_study(name: &str, cfg: &RunConfig) -> Result<StudyRun> {
         },
     )?;
     let reported = cfg.shard.is_none();
-    if reported {
-        report(st, &ctx, &specs)?;
-    }
+    let unexpected = if reported {
+        report(st, &ctx, &specs)?
+    } else {
+        Vec::new()
+    };
     Ok(StudyRun {
         name: name.into(),
         summary,
         reported,
         wall_seconds: t0.elapsed().as_secs_f64(),
+        unexpected,
     })
 }
 
-fn report(st: &dyn Study, ctx: &Ctx, specs: &[CaseSpec]) -> Result<()> {
+/// One line per case: `id: variant, record: outcome`.
+fn describe_case(r: &CaseResult) -> String {
+    let label = |k: &str| {
+        r.spec
+            .params
+            .get(k)
+            .and_then(|v| v.as_str())
+            .map(String::from)
+    };
+    let what: Vec<String> = [label("variant"), label("record")]
+        .into_iter()
+        .flatten()
+        .collect();
+    let outcome = match (&r.error_kind, &r.error) {
+        (Some(k), Some(e)) => format!("{k}: {e}"),
+        _ => "finished".into(),
+    };
+    format!("{}: {}: {outcome}", r.spec.id, what.join(", "))
+}
+
+/// Tables, figures and the summary; then the failed cases listed at the end of the
+/// summary. Returns the cases with an unexpected outcome.
+fn report(st: &dyn Study, ctx: &Ctx, specs: &[CaseSpec]) -> Result<Vec<String>> {
     let res = collect(&ctx.name, specs, &ctx.dir)?;
     write_cases_table(&ctx.dir, &res)?;
-    st.report(ctx, &res)
+    st.report(ctx, &res)?;
+    if let Some(note) = contact_story_note(&res) {
+        let path = ctx.dir.join("summary.md");
+        let s = std::fs::read_to_string(&path).unwrap_or_default();
+        // After the title line.
+        let (title, rest) = s.split_once("\n\n").unwrap_or((&s, ""));
+        write_atomic(&path, format!("{title}\n\n{note}\n\n{rest}").as_bytes())?;
+    }
+    let unexpected: Vec<String> = res
+        .iter()
+        .filter(|r| r.unexpected())
+        .map(describe_case)
+        .collect();
+    let expected: Vec<String> = res
+        .iter()
+        .filter(|r| r.spec.expect_failure.is_some() && !r.unexpected())
+        .map(describe_case)
+        .collect();
+    if !unexpected.is_empty() || !expected.is_empty() {
+        let path = ctx.dir.join("summary.md");
+        let mut s = std::fs::read_to_string(&path).unwrap_or_default();
+        if !unexpected.is_empty() {
+            s.push_str(&format!(
+                "\n### Failed cases ({} of {})\n\nThese cases did not finish as defined; `pound studies run` exits with code 4.\n\n",
+                unexpected.len(),
+                res.order.len()
+            ));
+            for u in &unexpected {
+                s.push_str(&format!("- `{u}`\n"));
+            }
+        }
+        if !expected.is_empty() {
+            s.push_str(&format!(
+                "\n### Cases that end with the solver error they exist to show ({})\n\n",
+                expected.len()
+            ));
+            for u in &expected {
+                s.push_str(&format!("- `{u}`\n"));
+            }
+        }
+        write_atomic(&path, s.as_bytes())?;
+    }
+    Ok(unexpected)
 }
 
 /// Merges shard outputs: `dirs` are output roots (each with `<study>/manifest.json` and
 /// `<study>/cases/`); case files are gathered into `out`, coverage is checked (an error
-/// lists the missing ids) and the reports are written. Returns the studies merged.
-pub fn merge(dirs: &[PathBuf], out: &Path, studies_dir: &Path) -> Result<Vec<String>> {
+/// lists the missing ids) and the reports are written. Returns the studies merged and the
+/// cases with an unexpected outcome (`study: id: …`).
+pub fn merge(
+    dirs: &[PathBuf],
+    out: &Path,
+    studies_dir: &Path,
+) -> Result<(Vec<String>, Vec<String>)> {
     let mut merged = Vec::new();
+    let mut unexpected = Vec::new();
     for &name in NAMES.iter().chain(&EXTRA) {
         let manifests: Vec<PathBuf> = dirs
             .iter()
@@ -347,7 +438,11 @@ pub fn merge(dirs: &[PathBuf], out: &Path, studies_dir: &Path) -> Result<Vec<Str
                 ids: specs.iter().map(|s| s.id.clone()).collect(),
             },
         )?;
-        report(st, &ctx, &specs)?;
+        unexpected.extend(
+            report(st, &ctx, &specs)?
+                .into_iter()
+                .map(|u| format!("{name}: {u}")),
+        );
         merged.push(name.to_string());
     }
     if merged.is_empty() {
@@ -359,7 +454,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path, studies_dir: &Path) -> Result<Vec<Str
                 .join(", ")
         )));
     }
-    Ok(merged)
+    Ok((merged, unexpected))
 }
 
 // ---------------------------------------------------------------------------------------
@@ -378,9 +473,51 @@ pub fn amplification(res: &Results, case: &CaseSpec) -> Option<Vec<Vec<f64>>> {
     )
 }
 
-/// Amplification at the top story of building `b`.
-pub fn amp_top(res: &Results, case: &CaseSpec, b: usize) -> Option<f64> {
-    amplification(res, case).and_then(|a| a.get(b).and_then(|v| v.last().copied()))
+/// Amplification at the contact story of building `b`: the story below the floor where
+/// contact 0 meets the building (its top story when the contact is at the roof).
+pub fn amp_contact(res: &Results, case: &CaseSpec, b: usize) -> Option<f64> {
+    let story = contact_floor(res.out(case)?, b)?;
+    amplification(res, case).and_then(|a| a.get(b).and_then(|v| v.get(story - 1).copied()))
+}
+
+/// The floor (from 1) where contact 0 meets building `b`, if it does.
+pub fn contact_floor(o: &CaseOutputs, b: usize) -> Option<usize> {
+    o.contact_floor.get(b).copied().flatten()
+}
+
+/// Peak |displacement| (m) of the floor where contact 0 meets building `b`.
+pub fn contact_floor_displacement(o: &CaseOutputs, b: usize) -> Option<f64> {
+    let f = contact_floor(o, b)?;
+    o.floor_displacement_max
+        .get(b)
+        .and_then(|v| v.get(f - 1).copied())
+}
+
+/// "Contact story" in words: which story of each building the studies' contact-story
+/// columns report.
+fn contact_story_note(res: &Results) -> Option<String> {
+    let o = res
+        .iter()
+        .filter_map(|r| r.ok())
+        .find(|o| !o.contact_floor.is_empty())?;
+    let parts: Vec<String> = o
+        .contact_floor
+        .iter()
+        .enumerate()
+        .filter_map(|(b, f)| {
+            let name = o
+                .buildings
+                .get(b)
+                .cloned()
+                .unwrap_or_else(|| format!("building {}", b + 1));
+            let n = o.story_shear_max.get(b).map_or(0, |v| v.len());
+            f.map(|f| format!("story {f} of {n} of {name}"))
+        })
+        .collect();
+    Some(format!(
+        "*Contact story* (columns and readings that say so): the story just below the floor of contact 0, {}.",
+        parts.join(" and ")
+    ))
 }
 
 /// Largest relative story-shear difference |V − V_ref| / V_ref over every story of every

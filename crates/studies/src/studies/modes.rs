@@ -1,12 +1,12 @@
 //! Study 3 (`modes`): the momentum method's hidden parameter, the number of modes kept, for
-//! both impulse variants: top-story amplification, achieved restitution and r_N.
+//! both impulse variants: contact-story amplification, achieved restitution and r_N.
 
 use serde::Deserialize;
 use solvers::Method;
 
 use super::{
-    amp_top, default_pga, default_records, failures_note, mean, record_label, write_summary, Ctx,
-    Study,
+    amp_contact, default_pga, default_records, failures_note, mean, record_label, write_summary,
+    Ctx, Study,
 };
 use crate::plot::{figure, Marker, Panel, PanelKind, Series};
 use crate::sweep::{CaseSpec, Result, Results};
@@ -66,7 +66,7 @@ impl Study for Modes {
         let ns = modes(ctx, &d);
         let mut t = Table::new(
             &format!("Momentum method against modes kept (gap {} cm, c_r = {}); means over {} records, achieved c_r minimum over all", d.gap * 100.0, d.restitution, recs.len()),
-            &["impulse", "modes", "r_N b1", "r_N b2", "amp. top b1", "amp. top b2", "impacts", "achieved c_r mean", "achieved c_r min"],
+            &["impulse", "modes", "r_N b1", "r_N b2", "amp. contact story b1", "amp. contact story b2", "impacts", "achieved c_r mean", "achieved c_r min"],
         );
         let mut long = Table::new(
             "Every record",
@@ -74,8 +74,8 @@ impl Study for Modes {
                 "record",
                 "impulse",
                 "modes",
-                "amp. top b1",
-                "amp. top b2",
+                "amp. contact story b1",
+                "amp. contact story b2",
                 "impacts",
                 "achieved c_r mean",
                 "achieved c_r min",
@@ -118,8 +118,8 @@ impl Study for Modes {
             let (mut r1, mut r2) = (Vec::new(), Vec::new());
             for &n in &ns {
                 let cs: Vec<CaseSpec> = recs.iter().map(|r| case(ctx, &d, r, var, n)).collect();
-                let a1 = mean(cs.iter().filter_map(|c| amp_top(res, c, 0)));
-                let a2 = mean(cs.iter().filter_map(|c| amp_top(res, c, 1)));
+                let a1 = mean(cs.iter().filter_map(|c| amp_contact(res, c, 0)));
+                let a2 = mean(cs.iter().filter_map(|c| amp_contact(res, c, 1)));
                 let imp = mean(
                     cs.iter()
                         .filter_map(|c| res.out(c).map(|o| o.impacts as f64)),
@@ -168,8 +168,8 @@ impl Study for Modes {
                             .to_string(),
                         var.clone(),
                         n.to_string(),
-                        f(amp_top(res, c, 0), 3),
-                        f(amp_top(res, c, 1), 3),
+                        f(amp_contact(res, c, 0), 3),
+                        f(amp_contact(res, c, 1), 3),
                         o.map_or("–".into(), |o| o.impacts.to_string()),
                         f(o.and_then(|o| o.restitution_mean), 4),
                         f(o.and_then(|o| o.restitution_min), 4),
@@ -225,7 +225,7 @@ impl Study for Modes {
                 )
             };
             reading.push(format!(
-                "{var} impulse: the top-story amplification (mean over records) of building 1 goes from {} with {n0} mode(s) to {} with {n1}, of building 2 from {} to {}; with 10 modes {} and {}; {restitution}.",
+                "{var} impulse: the contact-story amplification (mean over records) of building 1 goes from {} with {n0} mode(s) to {} with {n1}, of building 2 from {} to {}; with 10 modes {} and {}; {restitution}.",
                 f(at_n(&pa, n0), 2), f(at_n(&pa, n1), 2), f(at_n(&pb, n0), 2), f(at_n(&pb, n1), 2),
                 f(at_n(&pa, 10), 2), f(at_n(&pb, 10), 2)
             ));

@@ -5,7 +5,7 @@ use serde::Deserialize;
 use solvers::Method;
 
 use super::{
-    amp_top, default_pga, default_records, failures_note, mean, write_summary, Ctx, Study,
+    amp_contact, default_pga, default_records, failures_note, mean, write_summary, Ctx, Study,
 };
 use crate::plot::{figure, Marker, Panel, PanelKind, Series};
 use crate::sweep::{CaseSpec, Result, Results};
@@ -90,8 +90,8 @@ impl Study for Restitution {
             &[
                 "c_r",
                 "method",
-                "amp. top b1",
-                "amp. top b2",
+                "amp. contact story b1",
+                "amp. contact story b2",
                 "impacts",
                 "achieved c_r (mean)",
                 "persistent-contact phases",
@@ -139,8 +139,8 @@ impl Study for Restitution {
                     .iter()
                     .map(|r| methods(ctx, &d, r, cr).swap_remove(mi).1)
                     .collect();
-                let a1 = mean(cases.iter().filter_map(|c| amp_top(res, c, 0)));
-                let a2 = mean(cases.iter().filter_map(|c| amp_top(res, c, 1)));
+                let a1 = mean(cases.iter().filter_map(|c| amp_contact(res, c, 0)));
+                let a2 = mean(cases.iter().filter_map(|c| amp_contact(res, c, 1)));
                 let imp = mean(
                     cases
                         .iter()
@@ -195,15 +195,15 @@ impl Study for Restitution {
         figure(&ctx.dir, "restitution", (1200, 920), (2, 2), &[PanelKind::Xy(p1), PanelKind::Xy(p2), PanelKind::Xy(p3), PanelKind::Xy(p4)],
             "Amplification against the coefficient of restitution; gap element with the Kelvin-Voigt law (force clamped at zero).")?;
         t.write(&ctx.dir, "restitution")?;
-        let pick = |cr: f64, mi: usize, b: usize| {
-            mean(
-                recs.iter()
-                    .filter_map(|r| amp_top(res, &methods(ctx, &d, r, cr).swap_remove(mi).1, b)),
-            )
-        };
+        let pick =
+            |cr: f64, mi: usize, b: usize| {
+                mean(recs.iter().filter_map(|r| {
+                    amp_contact(res, &methods(ctx, &d, r, cr).swap_remove(mi).1, b)
+                }))
+            };
         let (lo, hi) = (cs[0], cs[cs.len() - 1]);
         let mut reading = vec![format!(
-            "With the momentum method the top-story amplification of building 1 (mean over records) is {} at c_r = {lo} and {} at c_r = {hi}; building 2: {} and {}.",
+            "With the momentum method the contact-story amplification of building 1 (mean over records) is {} at c_r = {lo} and {} at c_r = {hi}; building 2: {} and {}.",
             f(pick(lo, 0, 0), 2), f(pick(hi, 0, 0), 2), f(pick(lo, 0, 1), 2), f(pick(hi, 0, 1), 2)
         )];
         for (mi, lab) in labels.iter().enumerate().skip(1) {

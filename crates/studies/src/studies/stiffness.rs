@@ -2,15 +2,15 @@
 //!
 //! Gap element (linear law for c_r = 1, Kelvin–Voigt for c_r < 1) at log-spaced k against
 //! the momentum method with all modes (the rigid-impact limit of the same physics):
-//! amplification at the impact story, peak top displacement, impacts; error against k with
+//! amplification at the impact story, peak contact-floor displacement, impacts; error against k with
 //! a fitted log-log slope; CPU time against k.
 
 use serde::Deserialize;
 use solvers::Method;
 
 use super::{
-    amp_top, default_pga, default_records, failures_note, fit_line, logspace, mean, record_label,
-    shear_error, write_summary, Ctx, Study,
+    amp_contact, default_pga, default_records, failures_note, fit_line, logspace, mean,
+    record_label, shear_error, write_summary, Ctx, Study,
 };
 use crate::plot::{figure, Marker, Panel, PanelKind, Series};
 use crate::sweep::{CaseSpec, Result, Results};
@@ -80,7 +80,7 @@ fn gap_case(ctx: &Ctx, d: &Def, rec: &str, cr: f64, k: f64) -> CaseSpec {
         .with("gap_element.tolerance", format!("{:e}", d.tolerance))
         .with("gap_element.stiffness", format!("{k:e}"))
         .param("restitution", cr)
-        .param("stiffness", k)
+        .param("gap_stiffness_N_per_m", k)
         .param("variant", format!("gap element, {law}"))
 }
 
@@ -103,16 +103,12 @@ impl Study for Stiffness {
     fn report(&self, ctx: &Ctx, res: &Results) -> Result<()> {
         let d: Def = ctx.def()?;
         let g = grid(ctx, &d);
-        let top = |o: &crate::sweep::CaseOutputs, b: usize| {
-            o.floor_displacement_max
-                .get(b)
-                .and_then(|v| v.last().copied())
-        };
+        let top = super::contact_floor_displacement;
         let mut long = Table::new(
             "Gap element vs stiffness, every record (error = max relative story-shear difference from the momentum method with all modes)",
             &[
-                "record", "c_r", "k (N/m)", "amp. top story b1", "amp. top story b2", "peak top disp. b1 (m)",
-                "peak top disp. b2 (m)", "impacts", "first impact (s)", "achieved c_r (mean)", "error", "status",
+                "record", "c_r", "k (N/m)", "amp. contact story b1", "amp. contact story b2", "peak contact-floor disp. b1 (m)",
+                "peak contact-floor disp. b2 (m)", "impacts", "first impact (s)", "achieved c_r (mean)", "error", "status",
             ],
         );
         let mut cpu = Table::new(
@@ -155,7 +151,7 @@ impl Study for Stiffness {
             ..Default::default()
         };
         let mut summary = Table::new(
-            "Mean over the records: top-story amplification of building 1 and 2, impacts and error",
+            "Mean over the records: contact-story amplification of building 1 and 2, impacts and error",
             &["c_r", "k (N/m)", "amp. b1", "amp. b2", "impacts", "error"],
         );
         let mut reading = Vec::new();
@@ -174,7 +170,7 @@ impl Study for Stiffness {
                 let lab = record_label(rec);
                 let m = momentum(ctx, &d, rec, cr);
                 let mo = res.out(&m);
-                let m_amp = amp_top(res, &m, 0);
+                let m_amp = amp_contact(res, &m, 0);
                 let touches = mo.is_some_and(|o| o.impacts > 0);
                 if !touches && !no_contact.contains(&lab) {
                     no_contact.push(lab.clone());
@@ -184,7 +180,7 @@ impl Study for Stiffness {
                     cr.to_string(),
                     "momentum".into(),
                     f(m_amp, 3),
-                    f(amp_top(res, &m, 1), 3),
+                    f(amp_contact(res, &m, 1), 3),
                     f(mo.and_then(|o| top(o, 0)), 4),
                     f(mo.and_then(|o| top(o, 1)), 4),
                     mo.map_or("–".into(), |o| o.impacts.to_string()),
@@ -201,7 +197,7 @@ impl Study for Stiffness {
                     let c = gap_case(ctx, &d, rec, cr, k);
                     let r = res.get(&c);
                     let o = r.ok();
-                    let a = amp_top(res, &c, 0);
+                    let a = amp_contact(res, &c, 0);
                     let err = match (o, mo) {
                         (Some(o), Some(m)) => Some(shear_error(o, m)),
                         _ => None,
@@ -226,7 +222,7 @@ impl Study for Stiffness {
                         cr.to_string(),
                         format!("{k:.3e}"),
                         f(a, 3),
-                        f(amp_top(res, &c, 1), 3),
+                        f(amp_contact(res, &c, 1), 3),
                         f(o.and_then(|o| top(o, 0)), 4),
                         f(o.and_then(|o| top(o, 1)), 4),
                         o.map_or("–".into(), |o| o.impacts.to_string()),
@@ -291,8 +287,14 @@ impl Study for Stiffness {
             summary.push(vec![
                 cr.to_string(),
                 "momentum (rigid)".into(),
-                f(mean_of(&|r| amp_top(res, &momentum(ctx, &d, r, cr), 0)), 3),
-                f(mean_of(&|r| amp_top(res, &momentum(ctx, &d, r, cr), 1)), 3),
+                f(
+                    mean_of(&|r| amp_contact(res, &momentum(ctx, &d, r, cr), 0)),
+                    3,
+                ),
+                f(
+                    mean_of(&|r| amp_contact(res, &momentum(ctx, &d, r, cr), 1)),
+                    3,
+                ),
                 f(
                     mean_of(&|r| res.out(&momentum(ctx, &d, r, cr)).map(|o| o.impacts as f64)),
                     1,
@@ -311,11 +313,11 @@ impl Study for Stiffness {
                     cr.to_string(),
                     format!("{k:.3e}"),
                     f(
-                        mean_of(&|r| amp_top(res, &gap_case(ctx, &d, r, cr, k), 0)),
+                        mean_of(&|r| amp_contact(res, &gap_case(ctx, &d, r, cr, k), 0)),
                         3,
                     ),
                     f(
-                        mean_of(&|r| amp_top(res, &gap_case(ctx, &d, r, cr, k), 1)),
+                        mean_of(&|r| amp_contact(res, &gap_case(ctx, &d, r, cr, k), 1)),
                         3,
                     ),
                     f(
@@ -346,12 +348,12 @@ impl Study for Stiffness {
                 );
             }
             let (k0, k1) = (g.ks[0], *g.ks.last().unwrap_or(&g.ks[0]));
-            let a0 = mean_of(&|r| amp_top(res, &gap_case(ctx, &d, r, cr, k0), 0));
-            let a1 = mean_of(&|r| amp_top(res, &gap_case(ctx, &d, r, cr, k1), 0));
-            let am = mean_of(&|r| amp_top(res, &momentum(ctx, &d, r, cr), 0));
+            let a0 = mean_of(&|r| amp_contact(res, &gap_case(ctx, &d, r, cr, k0), 0));
+            let a1 = mean_of(&|r| amp_contact(res, &gap_case(ctx, &d, r, cr, k1), 0));
+            let am = mean_of(&|r| amp_contact(res, &momentum(ctx, &d, r, cr), 0));
             let e1 = mean_of(&|r| err_of(r, k1));
             reading.push(format!(
-                "For c_r = {cr} ({} law) the gap element's top-story amplification of building 1 (mean over {} records) moves from {} at k = {k0:.0e} to {} at k = {k1:.0e} N/m, against {} for the momentum method; the story-shear error left at k = {k1:.0e} is {}{}.",
+                "For c_r = {cr} ({} law) the gap element's contact-story amplification of building 1 (mean over {} records) moves from {} at k = {k0:.0e} to {} at k = {k1:.0e} N/m, against {} for the momentum method; the story-shear error left at k = {k1:.0e} is {}{}.",
                 if cr >= 1.0 { "linear" } else { "Kelvin–Voigt" },
                 g.records.len(),
                 f(a0, 2),

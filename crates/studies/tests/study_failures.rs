@@ -1,0 +1,171 @@
+//! A sweep whose cases fail does not exit 0: `pound studies run` exits 4 and names the
+//! failed cases, on stderr and in the study's summary; cases that exist to show a solver
+//! error (the stability study's chattering without persistent contact) are results.
+
+mod common;
+use common::{pound, TempDir};
+
+fn studies_dir() -> String {
+    concat!(env!("CARGO_MANIFEST_DIR"), "/../../studies").to_string()
+}
+
+#[test]
+fn failed_cases_exit_4_and_are_named() {
+    let d = TempDir::new("failedcases");
+    let rec = d.write("garbage.AT2", "junk\n1 2 3\nfoo\n");
+    let out = d.path("out");
+    let o = pound(&[
+        "studies",
+        "run",
+        "gap",
+        "--quick",
+        "--records",
+        rec.to_str().unwrap(),
+        "--studies-dir",
+        &studies_dir(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(4), "{err}");
+    assert!(err.contains("case(s) failed"), "{err}");
+    assert!(
+        err.contains("garbage.AT2 line 4"),
+        "the reason is named: {err}"
+    );
+    let summary = std::fs::read_to_string(out.join("gap/summary.md")).unwrap();
+    assert!(summary.contains("### Failed cases"), "{summary}");
+    // Every case is listed by id.
+    let cases: Vec<serde_json::Value> =
+        serde_json::from_str(&std::fs::read_to_string(out.join("gap/cases.json")).unwrap())
+            .unwrap();
+    assert!(!cases.is_empty());
+    for c in &cases {
+        let id = c["spec"]["id"].as_str().unwrap();
+        assert!(summary.contains(id), "{id} not named in the summary");
+    }
+}
+
+#[test]
+fn expected_solver_errors_are_results() {
+    let d = TempDir::new("expectedfail");
+    let out = d.path("out");
+    let o = pound(&[
+        "studies",
+        "run",
+        "stability",
+        "--quick",
+        "--studies-dir",
+        &studies_dir(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary = std::fs::read_to_string(out.join("stability/summary.md")).unwrap();
+    assert!(
+        summary.contains("end with the solver error they exist to show (1)"),
+        "{summary}"
+    );
+    assert!(summary.contains("Stalled") && !summary.contains("### Failed cases"));
+}
+
+/// A study scene whose contact is below the roofs: the studies report the story under the
+/// contact floor and say so, and the separation rules use the contact floors.
+#[test]
+fn studies_report_the_contact_story() {
+    let d = TempDir::new("contactstory");
+    let paper = std::fs::read_to_string(format!("{}/paper/scene.toml", studies_dir())).unwrap();
+    let rec = format!(
+        "{}/../data/ground-motions/RSN752_LOMAP_CAP000.AT2",
+        studies_dir()
+    );
+    let scene = paper
+        .replace("left_floor = 15", "left_floor = 10")
+        .replace("right_floor = 15", "right_floor = 10")
+        .replace("../../data/ground-motions/RSN752_LOMAP_CAP000.AT2", &rec);
+    d.write("low.toml", &scene);
+    let def = std::fs::read_to_string(format!("{}/gap.toml", studies_dir()))
+        .unwrap()
+        .replace("scene = \"paper/scene.toml\"", "scene = \"low.toml\"")
+        .replace("\"../data/", &format!("\"{}/../data/", studies_dir()));
+    d.write("gap.toml", &def);
+    let out = d.path("out");
+    let o = pound(&[
+        "studies",
+        "run",
+        "gap",
+        "--quick",
+        "--studies-dir",
+        d.0.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary = std::fs::read_to_string(out.join("gap/summary.md")).unwrap();
+    assert!(
+        summary.contains("story 10 of 15 of building1 and story 10 of 15 of building2"),
+        "{summary}"
+    );
+    // Δ1 of the separation table is the peak displacement of floor 10 without contact.
+    let cases: Vec<serde_json::Value> =
+        serde_json::from_str(&std::fs::read_to_string(out.join("gap/cases.json")).unwrap())
+            .unwrap();
+    let base = cases
+        .iter()
+        .find(|c| c["spec"]["params"]["baseline"] == true)
+        .unwrap();
+    let d1 = base["outputs"]["floor_displacement_max"][0][9]
+        .as_f64()
+        .unwrap();
+    let top = base["outputs"]["floor_displacement_max"][0][14]
+        .as_f64()
+        .unwrap();
+    assert!(
+        (d1 - top).abs() > 1e-3,
+        "floor 10 and roof differ: {d1} {top}"
+    );
+    let cell = format!("| {:.2} |", d1 * 100.0);
+    assert!(
+        summary.contains(&cell)
+            || std::fs::read_to_string(out.join("gap/separation.md"))
+                .map_or(false, |t| t.contains(&cell)),
+        "Δ1 = {cell} in the separation table"
+    );
+}
+
+/// A scene whose contact 0 does not join buildings 1 and 2 is refused (exit 2).
+#[test]
+fn study_scene_with_contact_elsewhere_is_refused() {
+    let d = TempDir::new("contactelsewhere");
+    let paper = std::fs::read_to_string(format!("{}/paper/scene.toml", studies_dir())).unwrap();
+    let rec = format!(
+        "{}/../data/ground-motions/RSN752_LOMAP_CAP000.AT2",
+        studies_dir()
+    );
+    let third = "[[buildings]]\nname = \"building3\"\nstories = 3\nmass = 1.0e6\nstory_stiffness = 1.0e9\n\n[[contacts]]";
+    let scene = paper
+        .replacen("[[contacts]]", third, 1)
+        .replace("right = \"building2\"", "right = \"building3\"")
+        .replace("right_floor = 15", "right_floor = 3")
+        .replace("../../data/ground-motions/RSN752_LOMAP_CAP000.AT2", &rec);
+    d.write("three.toml", &scene);
+    let def = std::fs::read_to_string(format!("{}/gap.toml", studies_dir()))
+        .unwrap()
+        .replace("scene = \"paper/scene.toml\"", "scene = \"three.toml\"");
+    d.write("gap.toml", &def);
+    let out = d.path("out");
+    let o = pound(&[
+        "studies",
+        "run",
+        "gap",
+        "--quick",
+        "--studies-dir",
+        d.0.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("joins buildings 1 and 3"), "{err}");
+    assert!(!out.join("gap/summary.md").exists());
+}
