@@ -19,11 +19,8 @@ use crate::model::{calibrate_two_frequencies, Building, Damping, ModelError};
 /// Errors from reading, overriding or validating a scene.
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
-    #[error("cannot read scene file {file}: {source}")]
-    Io {
-        file: String,
-        source: std::io::Error,
-    },
+    #[error("cannot read scene file {file}: {}", crate::ground::record::io_reason(.error))]
+    Io { file: String, error: std::io::Error },
     #[error("{file}: {message}")]
     Parse { file: String, message: String },
     #[error("{file}: key `{key}`: {message}")]
@@ -210,14 +207,17 @@ pub struct Scene {
 // Raw file structures
 
 #[derive(Deserialize)]
-#[serde(untagged)]
+#[serde(untagged, expecting = "a number or a list of numbers")]
 enum ScalarOrList {
     Scalar(f64),
     List(Vec<f64>),
 }
 
 #[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(
+    deny_unknown_fields,
+    expecting = "a scene: tables buildings, contacts, ground_motion, analysis, momentum, gap_element"
+)]
 struct RawScene {
     name: Option<String>,
     buildings: Vec<RawBuilding>,
@@ -233,7 +233,10 @@ struct RawScene {
 }
 
 #[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(
+    deny_unknown_fields,
+    expecting = "a building table (keys name, masses or stories and mass, story_stiffness or target_frequencies_hz, damping_ratio, ...)"
+)]
 struct RawBuilding {
     name: String,
     masses: Option<Vec<f64>>,
@@ -248,7 +251,10 @@ struct RawBuilding {
 }
 
 #[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(
+    deny_unknown_fields,
+    expecting = "a contact table with keys left, left_floor, right, right_floor, gap, restitution"
+)]
 struct RawContact {
     left: String,
     left_floor: i64,
@@ -264,7 +270,10 @@ fn one() -> f64 {
 }
 
 #[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(
+    deny_unknown_fields,
+    expecting = "a ground_motion table with keys file, pga or scale, format, units, dt"
+)]
 struct RawGround {
     file: String,
     format: Option<String>,
@@ -275,7 +284,10 @@ struct RawGround {
 }
 
 #[derive(Deserialize, Default)]
-#[serde(deny_unknown_fields)]
+#[serde(
+    deny_unknown_fields,
+    expecting = "an analysis table with keys duration, max_impact_rate, max_steps"
+)]
 struct RawAnalysis {
     duration: Option<f64>,
     max_impact_rate: Option<f64>,
@@ -283,7 +295,10 @@ struct RawAnalysis {
 }
 
 #[derive(Deserialize, Default)]
-#[serde(deny_unknown_fields)]
+#[serde(
+    deny_unknown_fields,
+    expecting = "a momentum table with keys modes, impulse, persistent_contact, capture_velocity"
+)]
 struct RawMomentum {
     modes: Option<i64>,
     impulse: Option<ImpulseVariant>,
@@ -292,7 +307,10 @@ struct RawMomentum {
 }
 
 #[derive(Deserialize, Default)]
-#[serde(deny_unknown_fields)]
+#[serde(
+    deny_unknown_fields,
+    expecting = "a gap_element table with keys stiffness, law, integrator, tolerance, time_step, tension"
+)]
 struct RawGap {
     stiffness: Option<f64>,
     law: Option<ContactLaw>,
@@ -317,9 +335,9 @@ impl Scene {
         overrides: &[String],
     ) -> Result<Scene, SceneError> {
         let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+        let text = std::fs::read_to_string(path).map_err(|error| SceneError::Io {
             file: file.clone(),
-            source,
+            error,
         })?;
         let base = path.parent().unwrap_or(Path::new("."));
         let mut scene = Self::from_str_with_overrides(&text, &file, base, overrides)?;
@@ -347,14 +365,17 @@ impl Scene {
             for expr in overrides {
                 apply_override(&mut table, expr)?;
             }
-            toml::Value::Table(table)
-                .try_into()
-                .map_err(|e: toml::de::Error| {
+            // The path of the offending key, with array indices (`buildings[0].mass`).
+            serde_path_to_error::deserialize(toml::Value::Table(table)).map_err(
+                |e: serde_path_to_error::Error<toml::de::Error>| {
+                    let inner = e.inner().to_string();
                     parse_err(format!(
-                        "after --set overrides: {}",
-                        e.to_string().trim_end()
+                        "after --set overrides: key `{}`: {}",
+                        e.path(),
+                        inner.lines().next().unwrap_or("").trim_end()
                     ))
-                })?
+                },
+            )?
         };
         validate(raw, origin, base_dir)
     }
@@ -388,6 +409,12 @@ pub fn apply_override(table: &mut toml::Table, expr: &str) -> Result<(), SceneEr
         Ok(mut t) => t
             .remove("v")
             .unwrap_or(toml::Value::String(value.to_string())),
+        // A number TOML cannot hold (1e400 overflows a double) is not a word.
+        Err(_) if value.parse::<f64>().is_ok() => {
+            return Err(fail(format!(
+                "`{value}` is out of the range of a double-precision number (about ±1.8e308)"
+            )))
+        }
         Err(_) => toml::Value::String(value.to_string()),
     };
     let segs: Vec<&str> = path.split('.').collect();
@@ -492,6 +519,19 @@ fn validate(raw: RawScene, origin: &str, base_dir: &Path) -> Result<Scene, Scene
                 ))
             }
         };
+        if let Damping::PerMode(v) = &zeta_list {
+            if v.len() != masses.len() {
+                return Err(invalid(
+                    key("damping_ratio"),
+                    format!(
+                        "a list of {} ratio(s) for a building of {} floors: expected one ratio per mode ({}), or a single number for every mode",
+                        v.len(),
+                        masses.len(),
+                        masses.len()
+                    ),
+                ));
+            }
+        }
         if masses.is_empty() {
             return Err(invalid(
                 key("masses"),
@@ -711,7 +751,7 @@ fn validate(raw: RawScene, origin: &str, base_dir: &Path) -> Result<Scene, Scene
                     if g.units.is_some() || g.dt.is_some() {
                         return Err(invalid(
                             key("units"),
-                            "AT2 records carry their own units (g) and dt; remove `units`/`dt`"
+                            "AT2 records state their units (header line 3) and dt (line 4); remove `units`/`dt`"
                                 .into(),
                         ));
                     }
@@ -772,6 +812,12 @@ fn validate(raw: RawScene, origin: &str, base_dir: &Path) -> Result<Scene, Scene
                 }
             }
             let path = base_dir.join(&g.file);
+            if path.is_dir() {
+                return Err(invalid(
+                    key("file"),
+                    format!("record file {} is a directory, not a file", path.display()),
+                ));
+            }
             if !path.is_file() {
                 return Err(invalid(
                     key("file"),
@@ -910,6 +956,20 @@ fn validate(raw: RawScene, origin: &str, base_dir: &Path) -> Result<Scene, Scene
             ));
         }
         gap.time_step = dt;
+    }
+    // A fixed step longer than the record's step skips record points (and impacts).
+    if gap.integrator == Integrator::Newmark {
+        if let Some(g) = &ground {
+            if gap.time_step > g.dt * (1.0 + 1e-9) {
+                return Err(invalid(
+                    "gap_element.time_step".into(),
+                    format!(
+                        "{}: a Newmark step longer than the record's step ({} s) skips record points; expected at most {} s",
+                        gap.time_step, g.dt, g.dt
+                    ),
+                ));
+            }
+        }
     }
     if let Some(t) = rg.tension {
         gap.tension = t;

@@ -240,8 +240,8 @@ fn shorthand_forms() {
     let l = &s.buildings[0];
     assert_eq!(l.masses, vec![5.0e5; 4]);
     assert_eq!(l.story_stiffness, vec![8.0e8; 4]);
-    assert_eq!(l.damping, Damping::PerMode(vec![0.02, 0.03]));
-    assert_eq!(l.damping.ratio(3), 0.03, "the last ratio repeats");
+    assert_eq!(l.damping, Damping::PerMode(vec![0.02, 0.03, 0.03, 0.04]));
+    assert_eq!(l.damping.ratio(3), 0.04, "one ratio per mode");
     let r = &s.buildings[1];
     assert_eq!(r.initial_displacement, vec![0.001, 0.002, 0.003]);
     assert_eq!(r.initial_velocity, vec![0.0, 0.0, -0.01]);
@@ -477,7 +477,12 @@ fn ground_motion_errors_name_the_key() {
         // The record reader's own message comes through with the scene's key.
         (
             &["ground_motion.format=at2"],
-            &["ground_motion.file", "pulse_two_column.txt", "line 4"],
+            &[
+                "ground_motion.file",
+                "pulse_two_column.txt",
+                "line 3",
+                "UNITS OF G",
+            ],
         ),
     ];
     for (sets, parts) in cases {

@@ -10,11 +10,9 @@ use structure::Scene;
 /// Errors from writing outputs.
 #[derive(Debug, thiserror::Error)]
 pub enum OutputError {
-    #[error("cannot write {path}: {source}")]
-    Io {
-        path: String,
-        source: std::io::Error,
-    },
+    /// The OS error is part of the message, not a chained source (printed once).
+    #[error("cannot write {path}: {error}")]
+    Io { path: String, error: std::io::Error },
     #[error("cannot serialise {what}: {source}")]
     Json {
         what: String,
@@ -25,9 +23,9 @@ pub enum OutputError {
 /// Writes `bytes` to `path` atomically (temporary file in the same folder, then rename).
 /// An existing read-only file at `path` is an error, not replaced.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
-    let err = |source| OutputError::Io {
+    let err = |error| OutputError::Io {
         path: path.display().to_string(),
-        source,
+        error,
     };
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
@@ -85,7 +83,7 @@ pub fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<(), Out
 pub fn history_csv(scene: &Scene, history: &History) -> Result<String, OutputError> {
     let csv_err = |e: csv::Error| OutputError::Io {
         path: "history".into(),
-        source: std::io::Error::other(e.to_string()),
+        error: std::io::Error::other(e.to_string()),
     };
     let mut w = csv::WriterBuilder::new()
         .quote_style(csv::QuoteStyle::NonNumeric)
@@ -202,7 +200,7 @@ pub fn history_csv(scene: &Scene, history: &History) -> Result<String, OutputErr
     }
     let bytes = w.into_inner().map_err(|e| OutputError::Io {
         path: "history".into(),
-        source: std::io::Error::other(e.to_string()),
+        error: std::io::Error::other(e.to_string()),
     })?;
     Ok(String::from_utf8_lossy(&bytes).into_owned())
 }

@@ -170,7 +170,8 @@ enum StudiesCommand {
 
 #[derive(Args)]
 struct RecordArgs {
-    /// Record file: PEER AT2 (units g), two-column time/acceleration, or one-column.
+    /// Record file: PEER AT2 (units from its header), two-column time/acceleration, or
+    /// one-column.
     record: PathBuf,
     /// File format; default: at2 for *.at2 files, two-column otherwise.
     #[arg(long, value_enum)]
@@ -178,9 +179,10 @@ struct RecordArgs {
     /// Time step of a one-column record (s).
     #[arg(long)]
     dt: Option<f64>,
-    /// Units of a two- or one-column record: g, m/s^2 or cm/s^2.
-    #[arg(long, default_value = "g")]
-    units: String,
+    /// Units of a two- or one-column record: g (default), m/s^2 or cm/s^2. An AT2 record
+    /// states its own units on header line 3; --units must agree with them.
+    #[arg(long)]
+    units: Option<String>,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -209,28 +211,58 @@ fn input<E: std::fmt::Display>(e: E) -> anyhow::Error {
 }
 
 fn load_record(a: &RecordArgs) -> Result<GroundMotion> {
-    let units: Units = a.units.parse().map_err(|_| {
-        input(format!(
-            "--units `{}`: expected g, m/s^2 or cm/s^2",
-            a.units
-        ))
-    })?;
+    let units: Option<Units> = match &a.units {
+        None => None,
+        Some(u) => Some(
+            u.parse()
+                .map_err(|_| input(format!("--units `{u}`: expected g, m/s^2 or cm/s^2")))?,
+        ),
+    };
     let is_at2 = a
         .record
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("at2"));
-    let format = match (a.format, a.dt) {
-        (Some(FormatArg::At2), _) => RecordFormat::At2,
-        (Some(FormatArg::OneColumn), None) => {
-            return Err(input("a one-column record needs --dt (s)"))
+    let at2 = matches!(a.format, Some(FormatArg::At2)) || (a.format.is_none() && is_at2);
+    if at2 {
+        if a.dt.is_some() {
+            return Err(input(format!(
+                "--dt: {} is read as a PEER AT2 record, which states its time step on line 4; remove --dt (or give --format one-column / two-column)",
+                a.record.display()
+            )));
         }
-        (Some(FormatArg::OneColumn), Some(dt)) | (None, Some(dt)) => {
-            RecordFormat::OneColumn { dt, units }
+        if let Some(u) = units {
+            // Agreeing with the header is harmless; contradicting it is refused.
+            let text = std::fs::read_to_string(&a.record).unwrap_or_default();
+            if let Some(h) = text
+                .lines()
+                .nth(2)
+                .and_then(structure::ground::record::at2_units)
+            {
+                if h != u {
+                    return Err(input(format!(
+                        "--units {u}: {} states its units on line 3 as {h}; remove --units",
+                        a.record.display()
+                    )));
+                }
+            }
         }
-        (Some(FormatArg::TwoColumn), _) => RecordFormat::TwoColumn { units },
-        (None, None) if is_at2 => RecordFormat::At2,
-        (None, None) => RecordFormat::TwoColumn { units },
-    };
+    }
+    let units = units.unwrap_or(Units::G);
+    let format =
+        match (a.format, a.dt) {
+            (Some(FormatArg::At2), _) => RecordFormat::At2,
+            (Some(FormatArg::OneColumn), None) => {
+                return Err(input("a one-column record needs --dt (s)"))
+            }
+            (Some(FormatArg::OneColumn), Some(dt)) => RecordFormat::OneColumn { dt, units },
+            (None, Some(dt)) if !is_at2 => RecordFormat::OneColumn { dt, units },
+            (Some(FormatArg::TwoColumn), Some(_)) => return Err(input(
+                "--dt: a two-column record takes its time step from its time column; remove --dt",
+            )),
+            (Some(FormatArg::TwoColumn), None) => RecordFormat::TwoColumn { units },
+            (None, _) if is_at2 => RecordFormat::At2,
+            (None, _) => RecordFormat::TwoColumn { units },
+        };
     if let RecordFormat::OneColumn { dt, .. } = format {
         if !(dt.is_finite() && dt > 0.0) {
             return Err(input(format!("--dt {dt}: expected a time step > 0 (s)")));
@@ -320,6 +352,16 @@ fn run(cli: Cli) -> Result<()> {
                 MethodArg::Momentum => Method::Momentum,
                 MethodArg::Gap => Method::Gap,
             };
+            if let (Method::Momentum, Some(n)) = (method, scene.momentum.modes) {
+                for b in scene.buildings.iter().filter(|b| b.n_floors() < n) {
+                    eprintln!(
+                        "note: momentum.modes = {n} exceeds the {} modes of {}: all {} kept",
+                        b.n_floors(),
+                        b.name,
+                        b.n_floors()
+                    );
+                }
+            }
             let mut hist = history.as_ref().map(|_| History::default());
             let result = solvers::run(&scene, method, hist.as_mut())
                 .with_context(|| format!("{}: {method} analysis failed", path.display()))?;

@@ -111,7 +111,8 @@ fn record_valid_baseline() {
 #[test]
 fn record_missing_header() {
     let body = "0.01 0.02\n0.03 0.04\n0.05 0.06\n0.07 0.08\n0.09 0.10\n";
-    record_case("noheader.AT2", body, &[], "", &["line 4", "NPTS"]);
+    // Without a header, line 3 holds no units: the first line that cannot be a header.
+    record_case("noheader.AT2", body, &[], "", &["line 3", "UNITS OF G"]);
 }
 
 #[test]

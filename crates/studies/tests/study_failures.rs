@@ -30,7 +30,7 @@ fn failed_cases_exit_4_and_are_named() {
     assert_eq!(o.status.code(), Some(4), "{err}");
     assert!(err.contains("case(s) failed"), "{err}");
     assert!(
-        err.contains("garbage.AT2 line 4"),
+        err.contains("garbage.AT2 line 3"),
         "the reason is named: {err}"
     );
     let summary = std::fs::read_to_string(out.join("gap/summary.md")).unwrap();

@@ -103,12 +103,10 @@ pub struct GroundMotion {
 /// one applies) and what was expected.
 #[derive(Debug, thiserror::Error)]
 pub enum RecordError {
-    #[error("{path}: cannot read the record file: {source}")]
-    Io {
-        path: String,
-        #[source]
-        source: std::io::Error,
-    },
+    /// The OS error is part of the message (not a chained source, which would print it
+    /// twice).
+    #[error("{path}: cannot read the record file: {}", io_reason(.error))]
+    Io { path: String, error: std::io::Error },
     #[error("{origin} line {line}: expected {expected}, found {found:?}")]
     Header {
         origin: String,
@@ -162,6 +160,83 @@ pub enum RecordError {
         line: usize,
         found: usize,
     },
+}
+
+/// An I/O error in words: "is a directory" rather than the OS's wording for it.
+pub fn io_reason(e: &std::io::Error) -> String {
+    match e.kind() {
+        std::io::ErrorKind::IsADirectory => "it is a directory, not a file".into(),
+        std::io::ErrorKind::NotFound => "no such file".into(),
+        _ => e.to_string(),
+    }
+}
+
+/// Units stated on line 3 of a PEER AT2 header (`... IN UNITS OF G`, `UNITS OF CM/S/S`,
+/// `CM/SEC/SEC`, `CM/S^2`, `GAL`, `M/S/S`, `M/SEC/SEC`, `M/S^2`), if recognised.
+pub fn at2_units(line: &str) -> Option<Units> {
+    let up = line.to_ascii_uppercase();
+    let at = up.find("UNITS OF")?;
+    let word: String = up[at + "UNITS OF".len()..]
+        .split_whitespace()
+        .next()?
+        .trim_end_matches(['.', ','])
+        .to_string();
+    match word.as_str() {
+        "G" | "(G)" => Some(Units::G),
+        "CM/S/S" | "CM/SEC/SEC" | "CM/S2" | "CM/S^2" | "CM/SEC2" | "CM/SEC^2" | "GAL" => {
+            Some(Units::CentimetersPerSecond2)
+        }
+        "M/S/S" | "M/SEC/SEC" | "M/S2" | "M/S^2" | "M/SEC2" | "M/SEC^2" => {
+            Some(Units::MetersPerSecond2)
+        }
+        _ => None,
+    }
+}
+
+const AT2_UNITS: &str = "the acceleration units on line 3, e.g. \"ACCELERATION TIME SERIES IN UNITS OF G\" (G, CM/S/S, CM/SEC/SEC, CM/S^2, GAL, M/S/S, M/SEC/SEC or M/S^2)";
+
+/// A one-column read of a file whose every data line holds two numbers, the first rising by
+/// a constant step (times), would take the times for accelerations: refused.
+fn refuse_two_columns(text: &str, origin: &str) -> Result<(), RecordError> {
+    let mut firsts = Vec::new();
+    let mut first_line = 0;
+    for (i, raw) in text.lines().enumerate() {
+        let l = raw.split('#').next().unwrap_or("");
+        let toks = tokens(l, true);
+        if toks.is_empty() {
+            continue;
+        }
+        if toks.len() != 2 {
+            return Ok(());
+        }
+        let Some(t) = parse_number(toks[0].text) else {
+            return Ok(());
+        };
+        if first_line == 0 {
+            first_line = i + 1;
+        }
+        firsts.push(t);
+    }
+    if firsts.len() < 3 {
+        return Ok(());
+    }
+    let step = firsts[1] - firsts[0];
+    let uniform = step > 0.0
+        && firsts
+            .windows(2)
+            .all(|w| ((w[1] - w[0]) - step).abs() <= 1e-6 * step.abs());
+    if uniform {
+        return Err(RecordError::Header {
+            origin: origin.to_string(),
+            line: first_line,
+            expected: "one-column values (a one-column record was asked for, with a time step)"
+                .into(),
+            found: format!(
+                "two columns on every line, the first rising by {step} like times: a two-column record; read it with format two-column (no dt)"
+            ),
+        });
+    }
+    Ok(())
 }
 
 fn line_suffix(line: Option<usize>) -> String {
@@ -360,9 +435,9 @@ impl GroundMotion {
 
     /// Read a record file. The record's name is the file stem.
     pub fn load(path: &Path, format: &RecordFormat) -> Result<Self, RecordError> {
-        let bytes = std::fs::read(path).map_err(|source| RecordError::Io {
+        let bytes = std::fs::read(path).map_err(|error| RecordError::Io {
             path: path.display().to_string(),
-            source,
+            error,
         })?;
         let text = String::from_utf8_lossy(&bytes);
         let origin = path.file_name().map_or_else(
@@ -378,7 +453,8 @@ impl GroundMotion {
         }
     }
 
-    /// Parse a PEER AT2 record (values in g). `origin` names the file in messages.
+    /// Parse a PEER AT2 record, in the units its header states on line 3 ([`at2_units`]).
+    /// `origin` names the file in messages.
     pub fn from_at2_str(text: &str, origin: &str) -> Result<Self, RecordError> {
         let text = strip_bom(text);
         if text.trim().is_empty() {
@@ -387,6 +463,7 @@ impl GroundMotion {
             });
         }
         let mut lines = text.lines().enumerate().map(|(i, l)| (i + 1, l));
+        let mut units = Units::G;
         for n in 1..=3 {
             let Some((_, l)) = lines.next() else {
                 return Err(RecordError::Header {
@@ -402,10 +479,16 @@ impl GroundMotion {
                     return Err(RecordError::Header {
                         origin: origin.to_string(),
                         line: 3,
-                        expected: "an acceleration time series in units of g".into(),
+                        expected: "an acceleration time series".into(),
                         found: clip(l.trim()),
                     });
                 }
+                units = at2_units(l).ok_or_else(|| RecordError::Header {
+                    origin: origin.to_string(),
+                    line: 3,
+                    expected: AT2_UNITS.into(),
+                    found: clip(l.trim()),
+                })?;
             }
         }
         let Some((_, l4)) = lines.next() else {
@@ -435,8 +518,13 @@ impl GroundMotion {
         let mut last_line = 4;
         for (ln, l) in lines {
             for tok in tokens(l, false) {
-                let v = value(&tok, origin, ln, "a number (acceleration in g)")?;
-                accel.push(v * crate::G);
+                let v = value(
+                    &tok,
+                    origin,
+                    ln,
+                    &format!("a number (acceleration in {units})"),
+                )?;
+                accel.push(v * units.to_si());
                 last_line = ln;
             }
         }
@@ -564,6 +652,7 @@ impl GroundMotion {
                 dt,
             });
         }
+        refuse_two_columns(text, origin)?;
         let mut accel = Vec::new();
         let mut last_line = 1;
         let mut any = false;

@@ -4,7 +4,8 @@ use nalgebra::{DMatrix, DVector};
 
 use super::{ModelError, Modes};
 
-/// Modal damping: one ratio for every mode, or one per mode (the last value repeats).
+/// Modal damping: one ratio for every mode, or one per mode (scene files must give one per
+/// mode; past the list, code that builds a `PerMode` directly gets its last value).
 #[derive(Debug, Clone, PartialEq)]
 pub enum Damping {
     /// ζ for every mode (dimensionless). Scene default: 0.05.

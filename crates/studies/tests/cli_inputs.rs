@@ -1,0 +1,261 @@
+//! Inputs that used to give a wrong number with exit 0 (issue 12): a two-column file read
+//! as one column, AT2 units ignored, conflicting record options, damping lists of the wrong
+//! length, a clamped mode count, a Newmark step that skips the record, and error messages
+//! that leaked internals, dropped array indices, doubled OS errors or called a directory
+//! missing.
+
+mod common;
+use common::{pound, TempDir};
+
+const AT2: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../data/ground-motions/RSN752_LOMAP_CAP000.AT2"
+);
+
+fn scene() -> String {
+    concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../studies/paper/scene.toml"
+    )
+    .to_string()
+}
+
+/// Runs pound, expects exit 2 with every fragment on stderr, nothing on stdout.
+#[track_caller]
+fn refused(args: &[&str], expect: &[&str]) -> String {
+    let o = pound(args);
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert_eq!(o.status.code(), Some(2), "pound {args:?}: {err}");
+    assert!(!err.contains("panicked"), "{err}");
+    for e in expect {
+        assert!(err.contains(e), "stderr should contain {e:?}: {err}");
+    }
+    assert!(o.stdout.is_empty());
+    err
+}
+
+fn two_column(d: &TempDir) -> std::path::PathBuf {
+    let mut text = String::new();
+    for i in 0..200 {
+        text.push_str(&format!(
+            "{:.2} {:.4}\n",
+            i as f64 * 0.01,
+            0.1 * ((i % 7) as f64 - 3.0)
+        ));
+    }
+    d.write("two.txt", &text)
+}
+
+#[test]
+fn two_column_file_is_not_read_as_one_column() {
+    let d = TempDir::new("twocol");
+    let f = two_column(&d);
+    let f = f.to_str().unwrap();
+    for cmd in ["record", "spectrum"] {
+        refused(&[cmd, f, "--dt", "0.01"], &["two.txt line 1", "two-column"]);
+        refused(
+            &[cmd, f, "--format", "one-column", "--dt", "0.01"],
+            &["two.txt line 1", "two-column"],
+        );
+    }
+    refused(
+        &["record", f, "--format", "two-column", "--dt", "0.01"],
+        &["--dt", "time column"],
+    );
+    // Read as what it is, its PGA is that of the second column: 0.3 g.
+    let o = pound(&["record", f, "--json"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!((v["pga_g"].as_f64().unwrap() - 0.3).abs() < 1e-12, "{v}");
+}
+
+#[test]
+fn at2_units_come_from_the_header() {
+    let d = TempDir::new("at2units");
+    let text = std::fs::read_to_string(AT2).unwrap();
+    let g: serde_json::Value =
+        serde_json::from_slice(&pound(&["record", AT2, "--json"]).stdout).unwrap();
+    let pga_g = g["pga_g"].as_f64().unwrap();
+    for (units, factor) in [
+        ("CM/S/S", 0.01 / structure::G),
+        ("CM/SEC/SEC", 0.01 / structure::G),
+        ("GAL", 0.01 / structure::G),
+        ("M/S/S", 1.0 / structure::G),
+        ("G", 1.0),
+    ] {
+        let mut lines: Vec<&str> = text.lines().collect();
+        let l3 = format!("ACCELERATION TIME SERIES IN UNITS OF {units}");
+        lines[2] = &l3;
+        let f = d.write("u.AT2", &(lines.join("\n") + "\n"));
+        let o = pound(&["record", f.to_str().unwrap(), "--json"]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        let got = v["pga_g"].as_f64().unwrap();
+        assert!(
+            (got / (pga_g * factor) - 1.0).abs() < 1e-12,
+            "{units}: {got}"
+        );
+    }
+    let mut lines: Vec<&str> = text.lines().collect();
+    lines[2] = "ACCELERATION TIME SERIES IN UNITS OF FURLONGS/FORTNIGHT";
+    let f = d.write("bad.AT2", &(lines.join("\n") + "\n"));
+    refused(
+        &["record", f.to_str().unwrap()],
+        &["bad.AT2 line 3", "UNITS OF G"],
+    );
+    // --units agreeing with the header is harmless; contradicting it or --dt is refused.
+    assert!(pound(&["record", AT2, "--units", "g"]).status.success());
+    refused(
+        &["record", AT2, "--units", "cm/s^2"],
+        &["--units", "line 3", "g"],
+    );
+    refused(&["record", AT2, "--dt", "0.01"], &["--dt", "line 4"]);
+}
+
+#[test]
+fn scene_values_that_used_to_be_repeated_clamped_or_skipped() {
+    let s = scene();
+    refused(
+        &[
+            "run",
+            &s,
+            "--method",
+            "momentum",
+            "--set",
+            "buildings.1.damping_ratio=[0.05, 0.02]",
+        ],
+        &[
+            "buildings[1].damping_ratio",
+            "2 ratio(s)",
+            "15 floors",
+            "one ratio per mode",
+        ],
+    );
+    refused(
+        &[
+            "run",
+            &s,
+            "--method",
+            "gap",
+            "--set",
+            "gap_element.integrator=newmark",
+            "--set",
+            "gap_element.time_step=10",
+        ],
+        &["gap_element.time_step", "0.005"],
+    );
+    // A mode count above the floors is clamped, as users expect, and said on stderr.
+    let o = pound(&[
+        "run",
+        &s,
+        "--method",
+        "momentum",
+        "--set",
+        "momentum.modes=99",
+        "--set",
+        "analysis.duration=1",
+        "--no-baseline",
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("momentum.modes = 99 exceeds the 15 modes of building1: all 15 kept"),
+        "{err}"
+    );
+}
+
+#[test]
+fn messages_name_keys_with_indices_and_no_internals() {
+    let s = scene();
+    let e = refused(
+        &[
+            "run",
+            &s,
+            "--method",
+            "momentum",
+            "--set",
+            "buildings.0.mass=abc",
+        ],
+        &["buildings[0].mass"],
+    );
+    assert!(!e.contains("`buildings.mass`"), "{e}");
+    let e = refused(
+        &[
+            "run",
+            &s,
+            "--method",
+            "momentum",
+            "--set",
+            "buildings.1.damping_ratio=abc",
+        ],
+        &[
+            "buildings[1].damping_ratio",
+            "a number or a list of numbers",
+        ],
+    );
+    assert!(
+        !e.contains("untagged") && !e.contains("ScalarOrList"),
+        "{e}"
+    );
+    let e = refused(
+        &["run", &s, "--method", "momentum", "--set", "contacts.0=5"],
+        &["contacts[0]", "a contact table with keys left, left_floor"],
+    );
+    assert!(!e.contains("RawContact"), "{e}");
+    let e = refused(
+        &[
+            "run",
+            &s,
+            "--method",
+            "momentum",
+            "--set",
+            "ground_motion.pga=1e400",
+        ],
+        &["1e400", "out of the range"],
+    );
+    assert!(!e.contains("invalid type: string"), "{e}");
+    let d = TempDir::new("msgs");
+    let f = d.write(
+        "list.toml",
+        "[[buildings]]\nname = \"a\"\nmasses = [1e5, 1e5]\nstory_stiffness = \"lots\"\n[analysis]\nduration = 1\n",
+    );
+    let e = refused(
+        &["run", f.to_str().unwrap(), "--method", "momentum"],
+        &["line 4", "a number or a list of numbers"],
+    );
+    assert!(!e.contains("untagged"), "{e}");
+}
+
+#[test]
+fn directories_and_os_errors() {
+    let d = TempDir::new("dirs");
+    let dir = d.0.to_str().unwrap();
+    refused(&["run", dir, "--method", "momentum"], &["is a directory"]);
+    refused(&["record", dir], &["is a directory"]);
+    let f = d.write(
+        "s.toml",
+        &format!("[[buildings]]\nname = \"a\"\nmasses = [1e5, 1e5]\nstory_stiffness = 1e8\n[ground_motion]\nfile = \"{dir}\"\n"),
+    );
+    let e = refused(
+        &["run", f.to_str().unwrap(), "--method", "momentum"],
+        &["is a directory"],
+    );
+    assert!(!e.contains("does not exist"), "{e}");
+    let e = refused(&["record", "/no/such/file.AT2"], &["no such file"]);
+    assert_eq!(e.matches("os error").count(), 0, "{e}");
+    // An output that cannot be written: the OS error once.
+    let o = pound(&[
+        "run",
+        &scene(),
+        "--method",
+        "momentum",
+        "--set",
+        "analysis.duration=1",
+        "--no-baseline",
+        "--out",
+        "/proc/pound-cannot-write.json",
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert_eq!(err.matches("os error").count(), 1, "{err}");
+}
