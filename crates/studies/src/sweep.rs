@@ -308,6 +308,10 @@ pub struct CaseResult {
     pub outputs: Option<CaseOutputs>,
     /// Wall-clock seconds of the analysis (fastest of `repeat`); not deterministic.
     pub wall_seconds: f64,
+    /// Wall-clock seconds of every repeat, in the order run (for the spread); not
+    /// deterministic. Empty in case files written before it existed.
+    #[serde(default)]
+    pub wall_seconds_all: Vec<f64>,
 }
 
 impl CaseResult {
@@ -349,6 +353,7 @@ fn failed(spec: &CaseSpec, kind: &str, msg: String, wall: f64) -> CaseResult {
         error: Some(msg),
         outputs: None,
         wall_seconds: wall,
+        wall_seconds_all: vec![wall],
     }
 }
 
@@ -359,6 +364,7 @@ pub fn run_case(spec: &CaseSpec, studies_dir: &Path) -> CaseResult {
         Err(e) => return failed(spec, "Scene", e, 0.0),
     };
     let mut best = f64::INFINITY;
+    let mut walls = Vec::with_capacity(spec.repeat.max(1) as usize);
     let mut last = None;
     for _ in 0..spec.repeat.max(1) {
         let want_hist = spec.history;
@@ -370,6 +376,7 @@ pub fn run_case(spec: &CaseSpec, studies_dir: &Path) -> CaseResult {
         }));
         let wall = t0.elapsed().as_secs_f64();
         best = best.min(wall);
+        walls.push(wall);
         match res {
             Err(p) => {
                 let msg = p
@@ -502,6 +509,7 @@ pub fn run_case(spec: &CaseSpec, studies_dir: &Path) -> CaseResult {
         error: None,
         outputs: Some(outputs),
         wall_seconds: best,
+        wall_seconds_all: walls,
     }
 }
 
