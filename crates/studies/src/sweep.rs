@@ -270,6 +270,12 @@ pub struct CaseOutputs {
     pub restitution_max: Option<f64>,
     /// Largest penetration (gap element), m.
     pub max_penetration: Option<f64>,
+    /// Approach speeds u̇_left − u̇_right just before the impacts (gap element: at contact
+    /// closure) that approach (> 0), m/s: median and largest; None without such an impact.
+    #[serde(default)]
+    pub approach_speed_median: Option<f64>,
+    #[serde(default)]
+    pub approach_speed_max: Option<f64>,
     pub persistent_contacts: usize,
     /// Impacts (entries with a defined restitution) whose approach speed is ≤ 0.
     #[serde(default)]
@@ -440,6 +446,12 @@ pub fn run_case(spec: &CaseSpec, studies_dir: &Path) -> CaseResult {
             });
         }
     }
+    let approach: Vec<f64> = run
+        .impacts
+        .iter()
+        .map(|i| i.relative_velocity_before)
+        .filter(|v| *v > 0.0)
+        .collect();
     let outputs = CaseOutputs {
         settings: run.settings.clone(),
         buildings: run.buildings.iter().map(|b| b.name.clone()).collect(),
@@ -472,6 +484,8 @@ pub fn run_case(spec: &CaseSpec, studies_dir: &Path) -> CaseResult {
         restitution_min: rmin,
         restitution_max: rmax,
         max_penetration: max_pen,
+        approach_speed_median: median(&approach),
+        approach_speed_max: approach.iter().copied().reduce(f64::max),
         persistent_contacts: run.persistent_contacts.len(),
         impacts_nonpositive_approach: run
             .impacts
@@ -510,6 +524,18 @@ pub fn run_case(spec: &CaseSpec, studies_dir: &Path) -> CaseResult {
         outputs: Some(outputs),
         wall_seconds: best,
         wall_seconds_all: walls,
+    }
+}
+
+/// The median of `v` (mean of the middle two for an even count); None when empty.
+fn median(v: &[f64]) -> Option<f64> {
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    let n = s.len();
+    match n {
+        0 => None,
+        _ if n % 2 == 1 => Some(s[n / 2]),
+        _ => Some(0.5 * (s[n / 2 - 1] + s[n / 2])),
     }
 }
 
@@ -758,7 +784,7 @@ fn opt_e(v: Option<f64>) -> String {
     v.map(|x| format!("{x:e}")).unwrap_or_default()
 }
 
-const OUTPUT_COLUMNS: [Column; 17] = [
+const OUTPUT_COLUMNS: [Column; 19] = [
     ("impacts", |o| o.impacts.to_string()),
     ("persistent_contacts", |o| o.persistent_contacts.to_string()),
     ("restitution_mean", |o| opt_e(o.restitution_mean)),
@@ -768,6 +794,12 @@ const OUTPUT_COLUMNS: [Column; 17] = [
         o.restitution_undefined.to_string()
     }),
     ("max_penetration_m", |o| opt_e(o.max_penetration)),
+    ("approach_speed_median_m_per_s", |o| {
+        opt_e(o.approach_speed_median)
+    }),
+    ("approach_speed_max_m_per_s", |o| {
+        opt_e(o.approach_speed_max)
+    }),
     ("peak_closure_m", |o| opt_e(o.peak_closure)),
     ("energy_input_J", |o| format!("{:e}", o.energy_input)),
     ("energy_contact_J", |o| format!("{:e}", o.energy_contact)),

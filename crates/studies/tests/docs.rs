@@ -123,7 +123,10 @@ fn every_relative_link_and_anchor_resolves() {
             }
         }
     }
-    assert!(checked > 20, "only {checked} links found: is the parser right?");
+    assert!(
+        checked > 20,
+        "only {checked} links found: is the parser right?"
+    );
     assert!(broken.is_empty(), "broken links:\n{}", broken.join("\n"));
 }
 
@@ -199,7 +202,9 @@ fn python_example_matches_the_outputs_and_runs_where_pandas_is_installed() {
     ] {
         let mut v = &json;
         for k in path {
-            v = v.get(k).unwrap_or_else(|| panic!("run JSON has no {path:?}"));
+            v = v
+                .get(k)
+                .unwrap_or_else(|| panic!("run JSON has no {path:?}"));
         }
         assert!(code.contains(&format!("[\"{}\"]", path[path.len() - 1])));
     }
@@ -231,10 +236,16 @@ fn python_example_matches_the_outputs_and_runs_where_pandas_is_installed() {
     let cases = header("cases.csv");
     let peaks = header("peaks.csv");
     for c in ["case_id", "method"] {
-        assert!(cases.contains(&c.to_string()), "cases.csv lacks {c}: {cases:?}");
+        assert!(
+            cases.contains(&c.to_string()),
+            "cases.csv lacks {c}: {cases:?}"
+        );
     }
     for c in ["case_id", "building", "story", "amplification"] {
-        assert!(peaks.contains(&c.to_string()), "peaks.csv lacks {c}: {peaks:?}");
+        assert!(
+            peaks.contains(&c.to_string()),
+            "peaks.csv lacks {c}: {peaks:?}"
+        );
     }
 
     // Run it where Python and pandas are there (CI machines need not have them).
