@@ -14,10 +14,12 @@
 pub mod building;
 pub mod calibrate;
 pub mod modes;
+pub mod story_law;
 
 pub use building::{Building, Damping};
 pub use calibrate::{calibrate_two_frequencies, Calibration};
 pub use modes::Modes;
+pub use story_law::{Bilinear, BilinearParams, BilinearState};
 
 /// Errors raised while building or analysing a model.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
