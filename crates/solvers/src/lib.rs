@@ -15,11 +15,12 @@
 pub mod gap;
 pub mod momentum;
 pub mod output;
+pub mod overlap;
 pub mod response;
 pub mod rules;
 
 pub use output::{
-    BuildingResponse, ContactFlexibility, EnergyAudit, History, Impact, PersistentContact,
+    BuildingResponse, ContactFlexibility, EnergyAudit, History, Impact, Overlap, PersistentContact,
     RunOutput, Stats,
 };
 

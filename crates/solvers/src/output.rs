@@ -83,6 +83,27 @@ pub struct ContactFlexibility {
     pub r_n_right: f64,
 }
 
+/// Overlap audit of one facing floor pair without a contact of its own (see
+/// [`crate::overlap`]): floors that pass through each other in the model.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Overlap {
+    /// Left building and floor (1-based), as in the scene, oriented as the contact whose gap
+    /// is used.
+    pub left: String,
+    pub left_floor: usize,
+    pub right: String,
+    pub right_floor: usize,
+    /// Gap used, m: that of the contact nearest to this pair (in floors).
+    pub gap: f64,
+    /// Index of that contact in the scene.
+    pub contact: usize,
+    /// max over the run of u_left − u_right − gap, m: > 0 when the floors overlap beyond the
+    /// gap, < 0 when the gap is never closed.
+    pub max_overlap: f64,
+    /// Instant of that maximum, s.
+    pub time: f64,
+}
+
 /// Solver statistics of one run.
 #[derive(Debug, Clone, PartialEq, Serialize, Default)]
 pub struct Stats {
@@ -130,6 +151,12 @@ pub struct RunOutput {
     pub energy: EnergyAudit,
     pub stats: Stats,
     pub r_n: Vec<ContactFlexibility>,
+    /// Overlap audit: one entry per facing floor pair of two buildings joined by a contact
+    /// that has no contact of its own (empty when every facing pair has one).
+    pub overlaps: Vec<Overlap>,
+    /// Floors that would strike an adjacent building mid-story (floor-to-column impact, not
+    /// modelled); only with `story_height` on both buildings.
+    pub unmodelled: Vec<structure::scene::UnmodelledFacing>,
 }
 
 /// Sampled state over time: at every record point and at every event instant (impact,

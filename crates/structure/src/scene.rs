@@ -192,6 +192,10 @@ pub struct Scene {
     /// The scene file, if it came from one.
     pub file: Option<PathBuf>,
     pub buildings: Vec<Building>,
+    /// Story heights per building, m, story 1 first (`buildings[i].story_height`); `None`
+    /// when not given (then floor i of one building faces floor i of the other). An entry
+    /// missing for a building index (a scene built in code) counts as `None`.
+    pub story_heights: Vec<Option<Vec<f64>>>,
     pub contacts: Vec<Contact>,
     /// Ground acceleration (m/s², already scaled); `None` = free vibration.
     pub ground: Option<GroundMotion>,
@@ -201,6 +205,126 @@ pub struct Scene {
     pub momentum: MomentumOptions,
     pub gap_element: GapElementOptions,
     pub limits: Limits,
+}
+
+/// Two floors at the same elevation agree within this distance, m (`story_height`).
+pub const ELEVATION_TOLERANCE: f64 = 1e-6;
+
+/// A floor of one building whose elevation lies strictly between two levels (floors, or
+/// the ground) of an adjacent building: it would strike the other building's column
+/// mid-story (floor-to-column impact), which the shear-stick models do not represent. Only
+/// arises when both buildings give `story_height`.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct UnmodelledFacing {
+    /// Name of the building whose floor this is, and the floor (1-based).
+    pub building: String,
+    pub floor: usize,
+    /// Its elevation above the ground, m.
+    pub elevation: f64,
+    /// The adjacent building, and the levels of that building just below and just above
+    /// (1-based floors; 0 = the ground).
+    pub other: String,
+    pub between: [usize; 2],
+}
+
+/// Which floors of two buildings face each other.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Facings {
+    /// (floor of a, floor of b), 0-based, floor of a ascending: the floors at the same
+    /// elevation (within [`ELEVATION_TOLERANCE`]) when both buildings give story heights,
+    /// otherwise floor i with floor i up to the lower roof.
+    pub pairs: Vec<(usize, usize)>,
+    /// Floors of either building at an elevation strictly between two levels of the other
+    /// (only with story heights on both).
+    pub unmodelled: Vec<UnmodelledFacing>,
+}
+
+/// Floor elevations (m above the ground, floor 1 first) from story heights.
+fn elevations(heights: &[f64]) -> Vec<f64> {
+    heights
+        .iter()
+        .scan(0.0, |z, h| {
+            *z += h;
+            Some(*z)
+        })
+        .collect()
+}
+
+/// The facing floors of buildings `a` and `b` (see [`Facings`]).
+fn facings(buildings: &[Building], heights: &[Option<Vec<f64>>], a: usize, b: usize) -> Facings {
+    let h = |i: usize| heights.get(i).and_then(|h| h.as_ref());
+    match (h(a), h(b)) {
+        (Some(ha), Some(hb)) => {
+            let (za, zb) = (elevations(ha), elevations(hb));
+            let mut out = Facings::default();
+            for (i, &z) in za.iter().enumerate() {
+                if let Some(j) = zb
+                    .iter()
+                    .position(|&w| (w - z).abs() <= ELEVATION_TOLERANCE)
+                {
+                    out.pairs.push((i, j));
+                }
+            }
+            // Floors strictly between two levels of the other (ground = level 0), below its
+            // roof by more than the tolerance.
+            let mut between = |x: usize, zx: &[f64], y: usize, zy: &[f64]| {
+                for (i, &z) in zx.iter().enumerate() {
+                    let roof = *zy.last().unwrap_or(&0.0);
+                    if z >= roof - ELEVATION_TOLERANCE
+                        || zy.iter().any(|&w| (w - z).abs() <= ELEVATION_TOLERANCE)
+                    {
+                        continue;
+                    }
+                    let above = zy.iter().position(|&w| w > z).unwrap_or(zy.len() - 1);
+                    out.unmodelled.push(UnmodelledFacing {
+                        building: buildings[x].name.clone(),
+                        floor: i + 1,
+                        elevation: z,
+                        other: buildings[y].name.clone(),
+                        between: [above, above + 1],
+                    });
+                }
+            };
+            between(a, &za, b, &zb);
+            between(b, &zb, a, &za);
+            out
+        }
+        _ => Facings {
+            pairs: (0..buildings[a].n_floors().min(buildings[b].n_floors()))
+                .map(|i| (i, i))
+                .collect(),
+            unmodelled: vec![],
+        },
+    }
+}
+
+impl Scene {
+    /// The facing floors of buildings `a` and `b` (indices in [`Scene::buildings`]).
+    pub fn facings(&self, a: usize, b: usize) -> Facings {
+        facings(&self.buildings, &self.story_heights, a, b)
+    }
+
+    /// Pairs of buildings (a < b) joined by at least one contact, in order of first contact.
+    pub fn joined_pairs(&self) -> Vec<(usize, usize)> {
+        let mut out: Vec<(usize, usize)> = Vec::new();
+        for c in &self.contacts {
+            let p = (c.left.min(c.right), c.left.max(c.right));
+            if !out.contains(&p) {
+                out.push(p);
+            }
+        }
+        out
+    }
+
+    /// Floor-to-column facings of every pair of buildings joined by a contact: floors that
+    /// would strike an adjacent building mid-story, which no contact models (see
+    /// [`UnmodelledFacing`]). Empty unless the buildings give `story_height`.
+    pub fn unmodelled_facings(&self) -> Vec<UnmodelledFacing> {
+        self.joined_pairs()
+            .into_iter()
+            .flat_map(|(a, b)| self.facings(a, b).unmodelled)
+            .collect()
+    }
 }
 
 // ---------------------------------------------------------------------------------------
@@ -235,7 +359,7 @@ struct RawScene {
 #[derive(Deserialize)]
 #[serde(
     deny_unknown_fields,
-    expecting = "a building table (keys name, masses or stories and mass, story_stiffness or target_frequencies_hz, damping_ratio, ...)"
+    expecting = "a building table (keys name, masses or stories and mass, story_stiffness or target_frequencies_hz, damping_ratio, story_height, ...)"
 )]
 struct RawBuilding {
     name: String,
@@ -248,18 +372,20 @@ struct RawBuilding {
     damping_ratio: Option<ScalarOrList>,
     initial_displacement: Option<Vec<f64>>,
     initial_velocity: Option<Vec<f64>>,
+    story_height: Option<ScalarOrList>,
 }
 
 #[derive(Deserialize)]
 #[serde(
     deny_unknown_fields,
-    expecting = "a contact table with keys left, left_floor, right, right_floor, gap, restitution"
+    expecting = "a contact table with keys left, left_floor, right, right_floor (or floors = \"aligned\"), gap, restitution"
 )]
 struct RawContact {
     left: String,
-    left_floor: i64,
+    left_floor: Option<i64>,
     right: String,
-    right_floor: i64,
+    right_floor: Option<i64>,
+    floors: Option<String>,
     gap: f64,
     #[serde(default = "one")]
     restitution: f64,
@@ -485,6 +611,7 @@ fn validate(raw: RawScene, origin: &str, base_dir: &Path) -> Result<Scene, Scene
         ));
     }
     let mut buildings = Vec::with_capacity(raw.buildings.len());
+    let mut story_heights: Vec<Option<Vec<f64>>> = Vec::with_capacity(raw.buildings.len());
     for (bi, rb) in raw.buildings.into_iter().enumerate() {
         let key = |k: &str| format!("buildings[{bi}].{k}");
         if buildings.iter().any(|b: &Building| b.name == rb.name) {
@@ -549,6 +676,42 @@ fn validate(raw: RawScene, origin: &str, base_dir: &Path) -> Result<Scene, Scene
             ));
         }
         let n = masses.len();
+        let heights = match rb.story_height {
+            None => None,
+            Some(ScalarOrList::Scalar(h)) => {
+                if !(h.is_finite() && h > 0.0) {
+                    return Err(invalid(
+                        key("story_height"),
+                        format!("{h}: expected a finite story height > 0 (m)"),
+                    ));
+                }
+                Some(vec![h; n])
+            }
+            Some(ScalarOrList::List(hs)) => {
+                if hs.len() != n {
+                    return Err(invalid(
+                        key("story_height"),
+                        format!(
+                            "has {} values, expected {n} (one height per story, story 1 first), \
+                             or a single number for every story",
+                            hs.len()
+                        ),
+                    ));
+                }
+                if let Some((i, h)) = hs
+                    .iter()
+                    .enumerate()
+                    .find(|(_, h)| !(h.is_finite() && **h > 0.0))
+                {
+                    return Err(invalid(
+                        format!("buildings[{bi}].story_height[{i}]"),
+                        format!("{h}: expected a finite story height > 0 (m)"),
+                    ));
+                }
+                Some(hs)
+            }
+        };
+        story_heights.push(heights);
         let (stiffness, calibrated) = match (rb.story_stiffness, &rb.target_frequencies_hz) {
             (Some(_), Some(_)) => {
                 return Err(invalid(
@@ -625,7 +788,9 @@ fn validate(raw: RawScene, origin: &str, base_dir: &Path) -> Result<Scene, Scene
         buildings.push(b);
     }
 
-    let mut contacts = Vec::with_capacity(raw.contacts.len());
+    let mut contacts: Vec<Contact> = Vec::with_capacity(raw.contacts.len());
+    // The file entry (`contacts[i]`) each contact comes from (an aligned entry gives many).
+    let mut entry_of: Vec<usize> = Vec::with_capacity(raw.contacts.len());
     for (ci, rc) in raw.contacts.into_iter().enumerate() {
         let key = |k: &str| format!("contacts[{ci}].{k}");
         let find = |name: &str, k: &str| {
@@ -654,6 +819,25 @@ fn validate(raw: RawScene, origin: &str, base_dir: &Path) -> Result<Scene, Scene
                 ),
             ));
         }
+        // Story heights on one side only: the floors cannot be matched by elevation.
+        match (&story_heights[left], &story_heights[right]) {
+            (Some(_), None) | (None, Some(_)) => {
+                let (with, without, wi) = if story_heights[left].is_some() {
+                    (left, right, right)
+                } else {
+                    (right, left, left)
+                };
+                return Err(invalid(
+                    format!("buildings[{wi}].story_height"),
+                    format!(
+                        "missing: `{}` gives story heights and is joined to `{}` by contacts[{ci}]; \
+                         give `story_height` (m) for both buildings or for neither",
+                        buildings[with].name, buildings[without].name
+                    ),
+                ));
+            }
+            _ => {}
+        }
         let floor = |f: i64, b: usize, k: &str| -> Result<usize, SceneError> {
             let n = buildings[b].n_floors() as i64;
             if f < 1 || f > n {
@@ -667,8 +851,61 @@ fn validate(raw: RawScene, origin: &str, base_dir: &Path) -> Result<Scene, Scene
             }
             Ok((f - 1) as usize)
         };
-        let left_dof = floor(rc.left_floor, left, "left_floor")?;
-        let right_dof = floor(rc.right_floor, right, "right_floor")?;
+        let pairs: Vec<(usize, usize)> = match (&rc.floors, rc.left_floor, rc.right_floor) {
+            (Some(mode), lf, rf) => {
+                if mode != "aligned" {
+                    return Err(invalid(
+                        key("floors"),
+                        format!(
+                            "`{mode}`: expected \"aligned\" (a contact at every pair of floors \
+                             at the same elevation), or give `left_floor` and `right_floor`"
+                        ),
+                    ));
+                }
+                if lf.is_some() || rf.is_some() {
+                    let k = if lf.is_some() {
+                        "left_floor"
+                    } else {
+                        "right_floor"
+                    };
+                    return Err(invalid(
+                        key(k),
+                        "give `floors = \"aligned\"` or `left_floor` and `right_floor`, not both"
+                            .into(),
+                    ));
+                }
+                let f = facings(&buildings, &story_heights, left, right);
+                if f.pairs.is_empty() {
+                    return Err(invalid(
+                        key("floors"),
+                        format!(
+                            "\"aligned\": no floor of `{}` is at the elevation of a floor of `{}` \
+                             (within {ELEVATION_TOLERANCE:e} m)",
+                            buildings[left].name, buildings[right].name
+                        ),
+                    ));
+                }
+                f.pairs
+            }
+            (None, Some(lf), Some(rf)) => vec![(
+                floor(lf, left, "left_floor")?,
+                floor(rf, right, "right_floor")?,
+            )],
+            (None, lf, _) => {
+                let k = if lf.is_none() {
+                    "left_floor"
+                } else {
+                    "right_floor"
+                };
+                return Err(invalid(
+                    key(k),
+                    format!(
+                        "missing field `{k}`: give `left_floor` and `right_floor` (floor numbers \
+                         from 1), or `floors = \"aligned\"`"
+                    ),
+                ));
+            }
+        };
         if !(rc.gap.is_finite() && rc.gap >= 0.0) {
             return Err(invalid(
                 key("gap"),
@@ -684,46 +921,61 @@ fn validate(raw: RawScene, origin: &str, base_dir: &Path) -> Result<Scene, Scene
                 ),
             ));
         }
-        // The same floor pair twice (in either orientation) makes the contact system
-        // singular: refuse it here rather than fail inside a solver.
-        if let Some(other) = contacts.iter().position(|c: &Contact| {
-            (c.left, c.left_dof, c.right, c.right_dof) == (left, left_dof, right, right_dof)
-                || (c.left, c.left_dof, c.right, c.right_dof) == (right, right_dof, left, left_dof)
-        }) {
-            return Err(invalid(
-                format!("contacts[{ci}]"),
-                format!(
-                    "duplicate contact: floor {} of `{}` and floor {} of `{}` are already joined \
-                     by contacts[{other}]; one contact per floor pair",
-                    left_dof + 1,
-                    buildings[left].name,
-                    right_dof + 1,
-                    buildings[right].name
-                ),
-            ));
+        for (left_dof, right_dof) in pairs {
+            // The same floor pair twice (in either orientation) makes the contact system
+            // singular: refuse it here rather than fail inside a solver.
+            if let Some(other) = contacts.iter().position(|c: &Contact| {
+                (c.left, c.left_dof, c.right, c.right_dof) == (left, left_dof, right, right_dof)
+                    || (c.left, c.left_dof, c.right, c.right_dof)
+                        == (right, right_dof, left, left_dof)
+            }) {
+                let by = if entry_of[other] == ci {
+                    "this entry".to_string()
+                } else {
+                    format!("contacts[{}]", entry_of[other])
+                };
+                return Err(invalid(
+                    format!("contacts[{ci}]"),
+                    format!(
+                        "duplicate contact: floor {} of `{}` and floor {} of `{}` are already \
+                         joined by {by}; one contact per floor pair",
+                        left_dof + 1,
+                        buildings[left].name,
+                        right_dof + 1,
+                        buildings[right].name
+                    ),
+                ));
+            }
+            // Initial penetration: δ = u_left − u_right − gap must not exceed round-off at
+            // t = 0.
+            let delta0 = buildings[left].initial_displacement[left_dof]
+                - buildings[right].initial_displacement[right_dof]
+                - rc.gap;
+            if delta0 > 1e-9 * rc.gap.max(1e-3) {
+                return Err(invalid(
+                    format!("contacts[{ci}]"),
+                    format!(
+                        "floor {} of `{}` and floor {} of `{}` start penetrated by {delta0:.6e} m: \
+                         initial displacements (buildings.initial_displacement) close the gap \
+                         of {} m at t = 0",
+                        left_dof + 1,
+                        buildings[left].name,
+                        right_dof + 1,
+                        buildings[right].name,
+                        rc.gap
+                    ),
+                ));
+            }
+            contacts.push(Contact {
+                left,
+                left_dof,
+                right,
+                right_dof,
+                gap: rc.gap,
+                restitution: rc.restitution,
+            });
+            entry_of.push(ci);
         }
-        // Initial penetration: δ = u_left − u_right − gap must not exceed round-off at t = 0.
-        let delta0 = buildings[left].initial_displacement[left_dof]
-            - buildings[right].initial_displacement[right_dof]
-            - rc.gap;
-        if delta0 > 1e-9 * rc.gap.max(1e-3) {
-            return Err(invalid(
-                format!("contacts[{ci}]"),
-                format!(
-                    "the floors start penetrated by {delta0:.6e} m: initial displacements \
-                     (buildings.initial_displacement) close the gap of {} m at t = 0",
-                    rc.gap
-                ),
-            ));
-        }
-        contacts.push(Contact {
-            left,
-            left_dof,
-            right,
-            right_dof,
-            gap: rc.gap,
-            restitution: rc.restitution,
-        });
     }
 
     let (ground, ground_source) = match raw.ground_motion {
@@ -979,6 +1231,7 @@ fn validate(raw: RawScene, origin: &str, base_dir: &Path) -> Result<Scene, Scene
         name: raw.name.unwrap_or_else(|| "scene".into()),
         file: None,
         buildings,
+        story_heights,
         contacts,
         ground,
         ground_source,

@@ -10,6 +10,7 @@ pub fn free_scene(buildings: Vec<Building>, contacts: Vec<Contact>, duration: f6
     Scene {
         name: "test".into(),
         file: None,
+        story_heights: vec![None; buildings.len()],
         buildings,
         contacts,
         ground: None,

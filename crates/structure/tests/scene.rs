@@ -822,3 +822,242 @@ proptest! {
         let _ = Scene::from_str_with_overrides(&paper_text(), "fuzz.toml", &paper_dir(), &o);
     }
 }
+
+// ---------------------------------------------------------------------------------------
+// `floors = "aligned"` and `story_height` (issue 11)
+// ---------------------------------------------------------------------------------------
+
+/// The paper scene with its roof contact replaced by `floors = "aligned"`.
+fn paper_aligned_text() -> String {
+    let t = paper_text();
+    assert!(t.contains("left_floor = 15\n") && t.contains("right_floor = 15\n"));
+    t.replace("left_floor = 15\n", "floors = \"aligned\"\n")
+        .replace("right_floor = 15\n", "")
+}
+
+#[test]
+fn aligned_floors_without_heights_join_floor_i_to_floor_i() {
+    let s = Scene::from_str_with_overrides(
+        &paper_aligned_text(),
+        "aligned.toml",
+        &paper_dir(),
+        &[
+            "contacts.0.gap=0.05".into(),
+            "contacts.0.restitution=0.65".into(),
+        ],
+    )
+    .unwrap();
+    assert_eq!(s.contacts.len(), 15);
+    for (i, c) in s.contacts.iter().enumerate() {
+        assert_eq!((c.left, c.left_dof, c.right, c.right_dof), (0, i, 1, i));
+        assert_eq!((c.gap, c.restitution), (0.05, 0.65));
+    }
+    assert!(s.unmodelled_facings().is_empty());
+    // Unequal heights in floors: up to the lower roof.
+    let text = TINY
+        .replace("masses = [1.2e5, 1.2e5]", "masses = [1.2e5, 1.2e5, 1.2e5]")
+        .replace(
+            "story_stiffness = [1.5e8, 1.5e8]",
+            "story_stiffness = 1.5e8",
+        )
+        .replace("left_floor = 2\n", "floors = \"aligned\"\n")
+        .replace("right_floor = 2\n", "");
+    let s = load_str(&text, &[]).unwrap();
+    let pairs: Vec<_> = s
+        .contacts
+        .iter()
+        .map(|c| (c.left_dof, c.right_dof))
+        .collect();
+    assert_eq!(pairs, vec![(0, 0), (1, 1)]);
+    assert_eq!(s.facings(0, 1).pairs, pairs);
+    assert_eq!(s.facings(1, 0).pairs, pairs);
+}
+
+/// Building a: stories 4, 3, 3 m (floors at 4, 7, 10 m); building b: 3.5 m each, four
+/// stories (3.5, 7, 10.5, 14 m). Only floor 2 of each is at a common elevation; floor 1 of
+/// a (4 m) lies between floors 1 and 2 of b, floor 3 of a (10 m) between floors 2 and 3 of
+/// b, floor 1 of b (3.5 m) between the ground and floor 1 of a; floors 3 and 4 of b are
+/// above a's roof (no facing).
+const HEIGHTS: &str = r#"
+[[buildings]]
+name = "a"
+masses = [1.0e5, 1.0e5, 1.0e5]
+story_stiffness = 1.0e8
+story_height = [4.0, 3.0, 3.0]
+
+[[buildings]]
+name = "b"
+stories = 4
+mass = 1.2e5
+story_stiffness = 1.5e8
+story_height = 3.5
+
+[[contacts]]
+left = "a"
+floors = "aligned"
+right = "b"
+gap = 0.01
+restitution = 0.8
+
+[analysis]
+duration = 1.0
+"#;
+
+#[test]
+fn aligned_floors_with_heights_match_elevations_and_list_floor_to_column_facings() {
+    let s = load_str(HEIGHTS, &[]).unwrap();
+    assert_eq!(s.story_heights[0].as_deref(), Some(&[4.0, 3.0, 3.0][..]));
+    assert_eq!(s.story_heights[1].as_deref(), Some(&[3.5; 4][..]));
+    assert_eq!(s.contacts.len(), 1);
+    let c = &s.contacts[0];
+    assert_eq!(
+        (c.left_dof, c.right_dof, c.gap, c.restitution),
+        (1, 1, 0.01, 0.8)
+    );
+    let u = s.unmodelled_facings();
+    let got: Vec<_> = u
+        .iter()
+        .map(|f| (f.building.as_str(), f.floor, f.other.as_str(), f.between))
+        .collect();
+    assert_eq!(
+        got,
+        vec![
+            ("a", 1, "b", [1, 2]),
+            ("a", 3, "b", [2, 3]),
+            ("b", 1, "a", [0, 1])
+        ]
+    );
+    assert_eq!(u[0].elevation, 4.0);
+    // Within the tolerance (1e-6 m) elevations agree; beyond it they do not.
+    let s = load_str(
+        HEIGHTS,
+        &["buildings.1.story_height=[4.0000005, 3.0, 3.0, 3.0]"],
+    )
+    .unwrap();
+    let pairs: Vec<_> = s
+        .contacts
+        .iter()
+        .map(|c| (c.left_dof, c.right_dof))
+        .collect();
+    assert_eq!(pairs, vec![(0, 0), (1, 1), (2, 2)]);
+    assert!(s.unmodelled_facings().is_empty());
+    let s = load_str(
+        HEIGHTS,
+        &["buildings.1.story_height=[4.000002, 2.999998, 3.0, 3.0]"],
+    )
+    .unwrap();
+    let pairs: Vec<_> = s
+        .contacts
+        .iter()
+        .map(|c| (c.left_dof, c.right_dof))
+        .collect();
+    assert_eq!(pairs, vec![(1, 1), (2, 2)]);
+    assert_eq!(s.unmodelled_facings().len(), 2);
+    // Explicit floor contacts are unaffected by heights; the facings are still reported.
+    let explicit = HEIGHTS.replace(
+        "floors = \"aligned\"\n",
+        "left_floor = 3\nright_floor = 3\n",
+    );
+    let s = load_str(&explicit, &[]).unwrap();
+    assert_eq!((s.contacts[0].left_dof, s.contacts[0].right_dof), (2, 2));
+    assert_eq!(s.unmodelled_facings().len(), 3);
+}
+
+#[test]
+fn story_height_and_aligned_errors_name_the_key() {
+    err_has(
+        load_str(HEIGHTS, &["buildings.1.story_height=[3.5, 3.5]"]),
+        &["buildings[1].story_height", "has 2 values, expected 4"],
+    );
+    err_has(
+        load_str(HEIGHTS, &["buildings.0.story_height=[4.0, -3.0, 3.0]"]),
+        &["buildings[0].story_height[1]", "-3", "> 0 (m)"],
+    );
+    err_has(
+        load_str(HEIGHTS, &["buildings.1.story_height=0.0"]),
+        &["buildings[1].story_height", "> 0 (m)"],
+    );
+    err_has(
+        load_str(HEIGHTS, &["buildings.0.story_height=\"tall\""]),
+        &["buildings", "a number or a list of numbers"],
+    );
+    // Heights on one building only.
+    let one = HEIGHTS.replace("story_height = 3.5\n", "");
+    err_has(
+        load_str(&one, &[]),
+        &[
+            "buildings[1].story_height",
+            "missing",
+            "`a`",
+            "`b`",
+            "both buildings or for neither",
+        ],
+    );
+    let one_explicit = one.replace(
+        "floors = \"aligned\"\n",
+        "left_floor = 1\nright_floor = 1\n",
+    );
+    err_has(
+        load_str(&one_explicit, &[]),
+        &["buildings[1].story_height", "missing"],
+    );
+    // `floors` with explicit floors, another word, or no floors at all.
+    err_has(
+        load_str(HEIGHTS, &["contacts.0.left_floor=1"]),
+        &["contacts[0].left_floor", "not both"],
+    );
+    err_has(
+        load_str(HEIGHTS, &["contacts.0.right_floor=2"]),
+        &["contacts[0].right_floor", "not both"],
+    );
+    err_has(
+        load_str(HEIGHTS, &["contacts.0.floors=all"]),
+        &["contacts[0].floors", "`all`", "\"aligned\""],
+    );
+    let none = HEIGHTS.replace("floors = \"aligned\"\n", "");
+    err_has(
+        load_str(&none, &[]),
+        &["contacts[0].left_floor", "missing", "floors = \"aligned\""],
+    );
+    err_has(load_str(TINY, &["contacts.0.right_floor=x"]), &["contacts"]);
+    let half = TINY.replace("right_floor = 2\n", "");
+    err_has(
+        load_str(&half, &[]),
+        &["contacts[0].right_floor", "missing"],
+    );
+    // No floor at a common elevation.
+    err_has(
+        load_str(HEIGHTS, &["buildings.1.story_height=3.3"]),
+        &["contacts[0].floors", "no floor of `a`", "1e-6 m"],
+    );
+}
+
+#[test]
+fn duplicates_after_aligned_expansion_are_refused() {
+    let roof = "\n[[contacts]]\nleft = \"b\"\nleft_floor = 15\nright = \"building1\"\nright_floor = 15\ngap = 0.1\n"
+        .replace("\"b\"", "\"building2\"");
+    let text = format!("{}{roof}", paper_aligned_text());
+    err_has(
+        Scene::from_str_with_overrides(&text, "dup.toml", &paper_dir(), &[]),
+        &[
+            "contacts[1]",
+            "duplicate contact",
+            "floor 15",
+            "contacts[0]",
+        ],
+    );
+    // Two aligned entries for the same pair.
+    let twice = HEIGHTS.replace(
+        "[analysis]",
+        "[[contacts]]\nleft = \"b\"\nfloors = \"aligned\"\nright = \"a\"\ngap = 0.02\n\n[analysis]",
+    );
+    err_has(
+        load_str(&twice, &[]),
+        &[
+            "contacts[1]",
+            "duplicate contact",
+            "floor 2 of `b`",
+            "contacts[0]",
+        ],
+    );
+}

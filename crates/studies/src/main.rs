@@ -380,6 +380,9 @@ fn run(cli: Cli) -> Result<()> {
                 })?;
                 Some(report::amplification(&result, &base))
             };
+            for w in report::overlap_warnings(&result) {
+                eprintln!("warning: {w}");
+            }
             if let (Some(p), Some(h)) = (&history, &hist) {
                 io::write_atomic(p, io::history_csv(&scene, h)?.as_bytes())?;
             }

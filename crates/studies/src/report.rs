@@ -227,6 +227,7 @@ pub fn run_summary(scene: &Scene, run: &RunOutput, amplification: Option<&[Vec<f
             p.contact, p.start, p.end, p.released_by
         ));
     }
+    s.push_str(&overlap_lines(run));
     let e = &run.energy;
     s.push_str(&format!(
         "energy (J): initial {:.4e}, input {:.4e}, damping {:.4e}, contact {:.4e}, final {:.4e}, balance error {:.3e}\n",
@@ -245,6 +246,55 @@ pub fn run_summary(scene: &Scene, run: &RunOutput, amplification: Option<&[Vec<f
     s
 }
 
+/// The overlap audit in the `pound run` summary: every facing floor pair without a contact
+/// of its own, with its largest overlap beyond the gap (m, negative when the gap never
+/// closes), and the floor-to-column facings the model leaves out.
+pub fn overlap_lines(run: &RunOutput) -> String {
+    let mut s = String::new();
+    if !run.overlaps.is_empty() {
+        s.push_str(&format!(
+            "overlaps (facing floors without a contact; max of u_left − u_right − gap, m): {} pairs, {} beyond the gap
+",
+            run.overlaps.len(),
+            run.overlaps.iter().filter(|o| o.max_overlap > 0.0).count()
+        ));
+        for o in &run.overlaps {
+            s.push_str(&format!(
+                "  {} floor {} / {} floor {}: {:+.5} m at {:.4} s (gap {} m)\n",
+                o.left, o.left_floor, o.right, o.right_floor, o.max_overlap, o.time, o.gap
+            ));
+        }
+    }
+    for f in &run.unmodelled {
+        s.push_str(&format!(
+            "not modelled: floor {} of {} ({:.3} m) faces the column of {} between levels {} and {} (floor-to-column impact)\n",
+            f.floor, f.building, f.elevation, f.other, f.between[0], f.between[1]
+        ));
+    }
+    s
+}
+
+/// The stderr warnings of `pound run` about the overlap audit: when floors without a
+/// contact pass through each other beyond the gap (naming the worst pair), and when
+/// floor-to-column facings are not modelled.
+pub fn overlap_warnings(run: &RunOutput) -> Vec<String> {
+    let mut w = Vec::new();
+    let beyond = run.overlaps.iter().filter(|o| o.max_overlap > 0.0).count();
+    if let Some(o) = solvers::overlap::worst(&run.overlaps).filter(|o| o.max_overlap > 0.0) {
+        w.push(format!(
+            "{beyond} facing floor pair(s) without a contact overlap beyond the gap; worst: {} floor {} / {} floor {} by {:.4} m at {:.3} s (add contacts, e.g. floors = \"aligned\")",
+            o.left, o.left_floor, o.right, o.right_floor, o.max_overlap, o.time
+        ));
+    }
+    if !run.unmodelled.is_empty() {
+        w.push(format!(
+            "{} floor(s) face an adjacent building mid-story (floor-to-column impact, not modelled); see `unmodelled`",
+            run.unmodelled.len()
+        ));
+    }
+    w
+}
+
 /// The scene as it was run, after `--set` overrides and defaults, in the scene-file format
 /// (keys as in the README's scene section, floors counted from 1, SI units): every building
 /// with its per-floor masses, story stiffnesses and damping, every contact, the record with
@@ -256,19 +306,24 @@ pub fn resolved_scene(scene: &Scene) -> serde_json::Value {
     let buildings: Vec<serde_json::Value> = scene
         .buildings
         .iter()
-        .map(|b| {
+        .enumerate()
+        .map(|(bi, b)| {
             let damping = match &b.damping {
                 Damping::Uniform(z) => serde_json::json!(z),
                 Damping::PerMode(v) => serde_json::json!(v),
             };
-            serde_json::json!({
+            let mut v = serde_json::json!({
                 "name": b.name,
                 "masses": b.masses,
                 "story_stiffness": b.story_stiffness,
                 "damping_ratio": damping,
                 "initial_displacement": b.initial_displacement,
                 "initial_velocity": b.initial_velocity,
-            })
+            });
+            if let Some(Some(h)) = scene.story_heights.get(bi) {
+                v["story_height"] = serde_json::json!(h);
+            }
+            v
         })
         .collect();
     let contacts: Vec<serde_json::Value> = scene

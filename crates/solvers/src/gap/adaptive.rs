@@ -206,6 +206,8 @@ pub(crate) fn run(
     let initial = sys.mech_energy(&y[..n], &y[n..2 * n]) + stored0;
 
     let mut tracker = ResponseTracker::new(scene);
+    let mut overlaps = crate::overlap::OverlapTracker::new(scene);
+    sys.observe_overlaps(&mut overlaps, 0.0, &y[..n]);
     observe(sys, &mut tracker, &modes, &y, history.is_some());
     tracker.sample(0.0, history.as_deref_mut());
 
@@ -408,6 +410,9 @@ pub(crate) fn run(
             y_end.copy_from_slice(&dp.y1);
         }
         dense_peaks(sys, &dp, &y, &y_end, th_end, &mut tracker, &mut scratch);
+        if !overlaps.is_empty() {
+            dense_overlaps(sys, &dp, t, &y, &y_end, th_end, &mut overlaps);
+        }
         match event {
             Some((th, ci)) => {
                 dp.dense_all(th, &mut scratch);
@@ -486,7 +491,67 @@ pub(crate) fn run(
         sys.mech_energy(&y[..n], &y[n..2 * n]),
         stored_t,
     );
-    Ok(output(sys, scene, tracker.finish(), impacts, energy, stats))
+    Ok(output(
+        sys,
+        scene,
+        tracker.finish(),
+        impacts,
+        energy,
+        stats,
+        overlaps,
+    ))
+}
+
+/// The overlap audit over an accepted step (issue 11, [`crate::overlap`]): u_left − u_right
+/// of every audited pair at the end of the part taken (θ = `th_end`, state `y1`) and, when
+/// its rate turns from + to − over the step, at the interior maximum, located as in
+/// [`dense_peaks`] (Hermite estimate plus the |r₅|/16 slack against the running maximum,
+/// then bisection on the rate of the dense output). `t` is the step's start, s.
+fn dense_overlaps(
+    sys: &System,
+    dp: &Dopri5,
+    t: f64,
+    y: &[f64],
+    y1: &[f64],
+    th_end: f64,
+    ov: &mut crate::overlap::OverlapTracker,
+) {
+    let n = sys.n;
+    let len = th_end * dp.h;
+    if !(len > 0.0) {
+        return;
+    }
+    for k in 0..ov.pairs.len() {
+        let p = &ov.pairs[k];
+        let (l, r) = (
+            sys.blocks[p.left].off + p.left_dof,
+            sys.blocks[p.right].off + p.right_dof,
+        );
+        let (y0, yd0, ye, yde) = (
+            y[l] - y[r],
+            y[n + l] - y[n + r],
+            y1[l] - y1[r],
+            y1[n + l] - y1[n + r],
+        );
+        ov.offer(k, t + len, ye);
+        if !(yd0 > 0.0) {
+            continue;
+        }
+        let Some((_, h)) = crate::response::hermite_extremum(y0, yd0, ye, yde, len) else {
+            continue;
+        };
+        let slack = if th_end < 1.0 {
+            f64::INFINITY
+        } else {
+            (dp.quartic(l) - dp.quartic(r)).abs() / 16.0
+        };
+        if h + slack < ov.max[k] {
+            continue;
+        }
+        let rate = |th: f64| dp.dense(n + l, th) - dp.dense(n + r, th);
+        let th = crate::response::bisect(rate, 0.0, th_end);
+        ov.offer(k, t + th * dp.h, dp.dense(l, th) - dp.dense(r, th));
+    }
 }
 
 /// Peaks between the ends of an accepted step (issue 10): for every floor displacement and

@@ -315,6 +315,12 @@ impl System {
     }
 
     /// Observes every building's floor displacements.
+    /// Offers u_left − u_right of every audited overlap pair at time `t` (s), `u` the
+    /// floor displacements of all buildings (m).
+    pub fn observe_overlaps(&self, ov: &mut crate::overlap::OverlapTracker, t: f64, u: &[f64]) {
+        ov.observe(t, |b, i| u[self.blocks[b].off + i]);
+    }
+
     pub fn observe(&self, tracker: &mut crate::response::ResponseTracker, u: &[f64]) {
         for (bi, b) in self.blocks.iter().enumerate() {
             tracker.observe(bi, &u[b.off..b.off + b.len]);
@@ -382,6 +388,7 @@ pub(crate) fn output(
     mut impacts: Vec<crate::Impact>,
     energy: EnergyAudit,
     stats: crate::Stats,
+    overlaps: crate::overlap::OverlapTracker,
 ) -> RunOutput {
     impacts.sort_by(|a, b| a.time.total_cmp(&b.time));
     RunOutput {
@@ -395,6 +402,8 @@ pub(crate) fn output(
         energy,
         stats,
         r_n: Vec::new(),
+        overlaps: overlaps.finish(scene),
+        unmodelled: crate::overlap::unmodelled(scene),
     }
 }
 

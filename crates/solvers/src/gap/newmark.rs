@@ -178,6 +178,8 @@ pub(crate) fn run(
     }
 
     let mut tracker = ResponseTracker::new(scene);
+    let mut overlaps = crate::overlap::OverlapTracker::new(scene);
+    sys.observe_overlaps(&mut overlaps, 0.0, &u);
     sys.observe_sample(&mut tracker, &u, &v, &force);
     tracker.sample(0.0, history.as_deref_mut());
 
@@ -427,6 +429,7 @@ pub(crate) fn run(
         } else {
             sys.observe(&mut tracker, &u);
         }
+        sys.observe_overlaps(&mut overlaps, t1, &u);
         tracker.sample(t1, history.as_deref_mut());
     }
 
@@ -446,5 +449,13 @@ pub(crate) fn run(
         sys.mech_energy(&u, &v),
         stored_t,
     );
-    Ok(output(sys, scene, tracker.finish(), impacts, energy, stats))
+    Ok(output(
+        sys,
+        scene,
+        tracker.finish(),
+        impacts,
+        energy,
+        stats,
+        overlaps,
+    ))
 }

@@ -157,6 +157,7 @@ pub fn solve_with_diagnostics(
     let impacts = std::mem::take(&mut st.impacts);
     let phases = std::mem::take(&mut st.phases);
     let buildings = st.peaks(scene);
+    let overlaps = std::mem::take(&mut st.overlaps).finish(scene);
     Ok((
         RunOutput {
             method: "momentum".into(),
@@ -169,6 +170,8 @@ pub fn solve_with_diagnostics(
             energy,
             stats,
             r_n,
+            overlaps,
+            unmodelled: crate::overlap::unmodelled(scene),
         },
         diag,
     ))

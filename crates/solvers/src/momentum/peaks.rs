@@ -12,6 +12,10 @@
 //! extremum is located by Newton's method on ẏ(s) = 0 with ÿ from the equations of motion
 //! (q̈ = f − 2ζωq̇ − ω²q), started at the Hermite estimate, on the closed form, to a
 //! relative step of 1e-13, and its exact value replaces the peak if larger.
+//!
+//! The overlap audit ([`crate::overlap`]) uses the same machinery for the signed maxima of
+//! u_left[i] − u_right[j], whose coefficients c_n = φ_n[i] on the left building's modes and
+//! −φ_n[j] on the right building's span both buildings (`first` = 0, all modes).
 
 use super::modal::{Arc, Modal};
 
@@ -67,6 +71,18 @@ pub fn hermite_error_bound(modal: &Modal, first: usize, c: &[f64], arcs: &[Arc],
 /// The exact extremum of y = Σ_m c[m] q_{first+m} on the closed-form `arcs`, by Newton on
 /// ẏ = 0 from `s0`, kept in [0, `len`]. Returns y at the extremum.
 pub fn refine(modal: &Modal, first: usize, c: &[f64], arcs: &[Arc], len: f64, s0: f64) -> f64 {
+    refine_at(modal, first, c, arcs, len, s0).1
+}
+
+/// As [`refine`], returning the position s ∈ [0, `len`] of the extremum as well: (s, y).
+pub fn refine_at(
+    modal: &Modal,
+    first: usize,
+    c: &[f64],
+    arcs: &[Arc],
+    len: f64,
+    s0: f64,
+) -> (f64, f64) {
     let eval = |s: f64| {
         let (mut y, mut yd, mut ydd) = (0.0, 0.0, 0.0);
         for (m, (a, &cm)) in arcs.iter().zip(c).enumerate() {
@@ -93,5 +109,5 @@ pub fn refine(modal: &Modal, first: usize, c: &[f64], arcs: &[Arc], len: f64, s0
         s = next;
         (y, yd, ydd) = eval(s);
     }
-    y
+    (s, y)
 }

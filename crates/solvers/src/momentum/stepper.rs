@@ -11,6 +11,7 @@ use super::impulse::{self, ContactGeom};
 use super::modal::{Arc, Modal, StepCoeffs};
 use super::peaks;
 use super::persistent;
+use crate::overlap::OverlapTracker;
 use crate::response::ResponseTracker;
 use crate::rules::ImpactRateGuard;
 use crate::{BuildingResponse, History, Impact, PersistentContact, SolverError, Stats};
@@ -275,6 +276,10 @@ pub struct Stepper<'a> {
     /// Contact forces of the segment being integrated, N, one per scene contact: the
     /// holding forces of held contacts, 0 otherwise (history output).
     held_force: Vec<f64>,
+    /// Overlap audit of facing floors without a contact ([`crate::overlap`]).
+    pub overlaps: OverlapTracker,
+    /// Per audited pair: coefficients of u_left − u_right on all modes (φ_left − φ_right).
+    overlap_rows: Vec<Vec<f64>>,
 }
 
 impl<'a> Stepper<'a> {
@@ -365,6 +370,8 @@ impl<'a> Stepper<'a> {
                 .collect(),
             interval: peaks::Interval::default(),
             held_force: vec![0.0; p.contacts.len()],
+            overlap_rows: Vec::new(),
+            overlaps: OverlapTracker::new(scene),
             coef: vec![
                 0.0;
                 p.modal
@@ -393,6 +400,21 @@ impl<'a> Stepper<'a> {
                 })
                 .collect(),
         };
+        st.overlap_rows = st
+            .overlaps
+            .pairs
+            .iter()
+            .map(|op| {
+                let mut row = p.modal.floor_row(op.left, op.left_dof);
+                for (r, f) in row
+                    .iter_mut()
+                    .zip(p.modal.floor_row(op.right, op.right_dof))
+                {
+                    *r -= f;
+                }
+                row
+            })
+            .collect();
         st.energy.initial = p.modal.energy(&st.s.x, &st.s.v);
         for (c, ct) in p.contacts.iter().enumerate() {
             let d = ct.delta(&st.s.x);
@@ -484,16 +506,66 @@ impl<'a> Stepper<'a> {
                     }
                 }
             }
-            self.u_prev[b].copy_from_slice(u);
-            self.ud_prev[b].copy_from_slice(&self.ud[b]);
             if self.history.is_some() {
                 self.tracker.observe(b, u);
                 self.tracker.observe_velocity(b, &self.ud[b]);
             }
         }
+        if !self.overlaps.is_empty() {
+            self.observe_overlaps(len);
+        }
+        for b in 0..self.u.len() {
+            self.u_prev[b].copy_from_slice(&self.u[b]);
+            self.ud_prev[b].copy_from_slice(&self.ud[b]);
+        }
         if self.history.is_some() {
             self.tracker.observe_contact_forces(&self.held_force);
             self.tracker.sample(self.s.t, self.history.as_deref_mut());
+        }
+    }
+
+    /// The overlap audit at the current sample: u_left − u_right of every audited pair at
+    /// the sample and, when its rate changes sign from + to − over the interval since the
+    /// previous sample (length `len`), at the interior maximum, found as the story-shear
+    /// and displacement peaks are ([`peaks`]: Hermite estimate, cheap filter, rigorous
+    /// Hermite error bound, Newton on the closed form over both buildings' modes).
+    fn observe_overlaps(&mut self, len: f64) {
+        let t = self.s.t;
+        let (u, ud, up, udp) = (&self.u, &self.ud, &self.u_prev, &self.ud_prev);
+        let mut arcs: Option<Vec<Arc>> = None;
+        for k in 0..self.overlaps.pairs.len() {
+            let op = &self.overlaps.pairs[k];
+            let (l, i, r, j) = (op.left, op.left_dof, op.right, op.right_dof);
+            let y1 = u[l][i] - u[r][j];
+            self.overlaps.offer(k, t, y1);
+            if !(len > 0.0) {
+                continue;
+            }
+            let (y0, yd0, yd1) = (
+                up[l][i] - up[r][j],
+                udp[l][i] - udp[r][j],
+                ud[l][i] - ud[r][j],
+            );
+            if !(yd0 > 0.0) {
+                continue;
+            }
+            let Some((th, h)) = peaks::hermite_extremum(y0, yd0, y1, yd1, len) else {
+                continue;
+            };
+            let best = self.overlaps.max[k];
+            // Cheap filter, as for the peaks: the Hermite error is a small fraction of the
+            // content at the interval's frequencies.
+            if h + 0.1 * h.abs() < best {
+                continue;
+            }
+            let modal = &self.p.modal;
+            let a = arcs.get_or_insert_with(|| peaks::arcs(modal, 0..modal.len(), &self.interval));
+            let c = &self.overlap_rows[k];
+            if h + peaks::hermite_error_bound(modal, 0, c, a, len) < best {
+                continue;
+            }
+            let (s, y) = peaks::refine_at(modal, 0, c, a, len, th * len);
+            self.overlaps.offer(k, t - len + s, y);
         }
     }
 

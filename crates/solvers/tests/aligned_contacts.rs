@@ -1,0 +1,86 @@
+//! Contact at every facing floor (`floors = "aligned"`, issue 11) on the paper scene: 15
+//! simultaneous contacts exercise the joint impulse (a small LCP) of the momentum method.
+//! Its answer is the limit of the gap element as the spring stiffens: a linear penalty
+//! spring lets the floors penetrate by δ ≈ v √(m_eff/k), so every response of the gap
+//! element approaches the momentum method's as k^-1/2 — by √100 = 10 from k = 1e12 to
+//! 1e14 N/m. The test asserts that rate (with a factor 2.5 of margin) on every peak story
+//! shear and floor displacement of both buildings, with c_r = 1 (the linear law is
+//! elastic), over the first 12 s of the record (the first impacts and the strongest
+//! shaking of CAP000), at 10 and 5 cm.
+
+use solvers::{gap, momentum, RunOutput};
+use structure::testing::paper_scene_path;
+use structure::Scene;
+
+fn paper_aligned(overrides: &[&str]) -> Scene {
+    let text = std::fs::read_to_string(paper_scene_path())
+        .unwrap()
+        .replace("left_floor = 15\n", "floors = \"aligned\"\n")
+        .replace("right_floor = 15\n", "");
+    let o: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+    Scene::from_str_with_overrides(
+        &text,
+        "aligned.toml",
+        paper_scene_path().parent().unwrap(),
+        &o,
+    )
+    .expect("aligned paper scene")
+}
+
+/// Largest difference of all peak story shears and floor displacements, relative to the
+/// largest of each kind in the reference.
+fn difference(a: &RunOutput, reference: &RunOutput) -> f64 {
+    let mut worst: f64 = 0.0;
+    for (ba, br) in a.buildings.iter().zip(&reference.buildings) {
+        let vmax = br.story_shear_max.iter().cloned().fold(0.0, f64::max);
+        let dmax = br
+            .floor_displacement_max
+            .iter()
+            .cloned()
+            .fold(0.0, f64::max);
+        for (x, y) in ba.story_shear_max.iter().zip(&br.story_shear_max) {
+            worst = worst.max((x - y).abs() / vmax);
+        }
+        for (x, y) in ba
+            .floor_displacement_max
+            .iter()
+            .zip(&br.floor_displacement_max)
+        {
+            worst = worst.max((x - y).abs() / dmax);
+        }
+    }
+    worst
+}
+
+#[test]
+fn momentum_is_the_stiff_limit_of_the_gap_element_with_contact_at_every_floor() {
+    for gap in ["0.10", "0.05"] {
+        let g = format!("contacts.0.gap={gap}");
+        let scene = paper_aligned(&[&g, "analysis.duration=12"]);
+        assert_eq!(scene.contacts.len(), 15);
+        let m = momentum::solve(&scene, None).unwrap();
+        assert!(m.impacts.len() > 1, "{gap}: the floors never touch");
+        // Several floors are struck, not only the roofs.
+        let mut struck: Vec<usize> = m.impacts.iter().map(|i| i.contact).collect();
+        struck.sort();
+        struck.dedup();
+        assert!(
+            struck.len() > 1,
+            "{gap}: only contacts {struck:?} are struck"
+        );
+        let e = |k: &str| {
+            let s = paper_aligned(&[
+                &g,
+                "analysis.duration=12",
+                &format!("gap_element.stiffness={k}"),
+            ]);
+            difference(&gap::solve(&s, None).unwrap(), &m)
+        };
+        let (e12, e14) = (e("1e12"), e("1e14"));
+        eprintln!("gap {gap} m: struck contacts {struck:?}; gap element vs momentum: k=1e12 {e12:.3e}, k=1e14 {e14:.3e}");
+        assert!(
+            e14 <= 0.25 * e12,
+            "{gap}: {e12:.3e} -> {e14:.3e}, not the k^-1/2 rate"
+        );
+    }
+}
