@@ -1,30 +1,52 @@
-//! Figures as PNG and SVG with plotters, rendered with the committed DejaVu Sans font
-//! (`data/fonts/DejaVuSans.ttf`, registered with plotters' ab_glyph backend), so they render
-//! the same on any machine without system fonts.
+//! Figures as PNG and SVG with plotters.
 //!
-//! Log axes are drawn as linear axes in log10 of the data with `1eN` tick labels, which keeps
-//! one code path for every panel. Files are written atomically (PNG: drawn to a temporary
-//! file in the destination folder, then renamed).
+//! Text: every string is drawn from the glyph outlines of the committed DejaVu Sans font
+//! (`data/fonts/DejaVuSans.ttf`, see [`text`]): rasterised in the PNG, glyph paths in the SVG
+//! (no `<text>` element), so both render the same on any machine and viewer.
+//!
+//! Size: `figure` takes the pixel width from its `size` argument and derives every text and
+//! stroke size from it. The smallest text has an em of 0.035 × the width, so a figure printed
+//! 85 mm wide shows it at 8.5 pt (≥ 8 pt needs ≥ [`MIN_TEXT_FRACTION`] = 0.0332). The height
+//! follows from the layout: titles, axes, legends (below each panel, or one below all panels
+//! when they show the same series) and the caption take what they need and each plot area
+//! keeps the aspect ratio asked for by `size` (clamped to 0.4 … 0.85).
+//!
+//! Axes: log axes are linear axes in log10 of the data with ticks at whole decades, labelled
+//! 0.001 … 10000 when every tick lies in that range and 10⁻⁶-style otherwise (1-2-5 ticks
+//! when less than two decades are in view); linear axes get 1-2-2.5-5 × 10ⁿ steps, with a
+//! common ×10ⁿ form for very large or small values. Heat maps tick the grid values and have a
+//! colour bar. Files are written atomically (PNG: drawn to a temporary file in the
+//! destination folder, then renamed).
+
+mod text;
 
 use std::path::Path;
 use std::sync::Once;
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
-use plotters::style::{register_font, FontStyle};
+use plotters::style::{register_font, FontStyle, FontTransform};
+use plotters_backend::text_anchor::{HPos, Pos, VPos};
 
 use crate::io::write_atomic;
 use crate::sweep::{Result, StudyError};
 
-static FONT: &[u8] = include_bytes!("../../../data/fonts/DejaVuSans.ttf");
+pub use text::units_per_em;
+use text::{OutlineText, FONT_DATA};
+
 static REGISTER: Once = Once::new();
 
-/// Registers the committed font as "sans-serif" (once per process).
+/// Registers the committed font as "sans-serif" (once per process). plotters needs a
+/// registered font to build its text styles; the drawing itself goes through [`text`].
 pub fn register_fonts() {
     REGISTER.call_once(|| {
-        let _ = register_font("sans-serif", FontStyle::Normal, FONT);
+        let _ = register_font("sans-serif", FontStyle::Normal, FONT_DATA);
     });
 }
+
+/// Smallest em size of any text as a fraction of the figure width for 8 pt at 85 mm print
+/// width: 8 pt × 25.4 / 72 mm ÷ 85 mm = 0.0332.
+pub const MIN_TEXT_FRACTION: f64 = 0.0332;
 
 /// Tableau-10 colours.
 pub const PALETTE: [RGBColor; 10] = [
@@ -135,12 +157,15 @@ pub struct Heat {
     pub y_label: String,
     pub log_x: bool,
     pub log_y: bool,
-    /// (x, y, value); None = failed run (grey cell marked "x").
+    /// (x, y, value); None = failed run (grey cell crossed out).
     pub cells: Vec<(f64, f64, Option<f64>)>,
     /// Colour scale in log10 of the value.
     pub log_value: bool,
-    /// Value range of the colour scale (in the value's units).
+    /// Value range of the colour scale (in the value's units); values outside take the
+    /// end colours.
     pub value_range: (f64, f64),
+    /// Label of the colour bar (with unit); empty: none.
+    pub value_label: String,
 }
 
 #[derive(Debug, Clone)]
@@ -154,33 +179,6 @@ fn tr(v: f64, log: bool) -> f64 {
         v.log10()
     } else {
         v
-    }
-}
-
-fn tick_label(v: f64, log: bool) -> String {
-    if log {
-        if (v - v.round()).abs() < 1e-9 {
-            format!("1e{}", v.round() as i64)
-        } else {
-            let x = 10f64.powf(v);
-            format!("{x:.2e}")
-        }
-    } else {
-        let a = v.abs();
-        if a < 1e-12 {
-            return "0".into();
-        }
-        if a != 0.0 && !(1e-3..1e5).contains(&a) {
-            format!("{v:.1e}")
-        } else {
-            let s = format!("{v:.4}");
-            let s = s.trim_end_matches('0').trim_end_matches('.');
-            if s == "-0" {
-                "0".into()
-            } else {
-                s.to_string()
-            }
-        }
     }
 }
 
@@ -201,24 +199,447 @@ fn bounds(vals: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
     Some((lo - pad, hi + pad))
 }
 
-type DErr = String;
+// ---------------------------------------------------------------------------------------
+// Tick labels.
 
-fn err<E: std::fmt::Debug>(e: E) -> DErr {
-    format!("{e:?}")
+/// `n` with Unicode superscript digits and minus (10⁻⁶).
+fn superscript(n: i32) -> String {
+    n.to_string()
+        .chars()
+        .map(|c| match c {
+            '-' => '⁻',
+            '0' => '⁰',
+            '1' => '¹',
+            '2' => '²',
+            '3' => '³',
+            '4' => '⁴',
+            '5' => '⁵',
+            '6' => '⁶',
+            '7' => '⁷',
+            '8' => '⁸',
+            '9' => '⁹',
+            c => c,
+        })
+        .collect()
 }
 
-fn draw_xy<DB: DrawingBackend>(
-    area: &DrawingArea<DB, Shift>,
-    p: &Panel,
-) -> std::result::Result<(), DErr> {
-    let pts = |s: &Series| -> Vec<(f64, f64)> {
-        s.points
-            .iter()
-            .map(|&(x, y)| (tr(x, p.log_x), tr(y, p.log_y)))
-            .filter(|(x, y)| x.is_finite() && y.is_finite())
-            .collect()
+/// `v` with `dec` decimals, "-0" written as "0".
+fn fixed(v: f64, dec: usize) -> String {
+    let s = format!("{v:.dec$}");
+    if s.trim_start_matches('-')
+        .chars()
+        .all(|c| c == '0' || c == '.')
+    {
+        "0".into()
+    } else {
+        // A typographic minus sign.
+        s.replace('-', "−")
+    }
+}
+
+/// Decimal exponent and mantissa of |v| > 0 rounded to `sig` significant digits.
+fn sci(v: f64, sig: i32) -> (i32, f64) {
+    let mut e = v.abs().log10().floor() as i32;
+    let q = 10f64.powi(sig - 1);
+    let mut m = (v / 10f64.powi(e) * q).round() / q;
+    if m.abs() >= 10.0 {
+        m /= 10.0;
+        e += 1;
+    }
+    (e, m)
+}
+
+/// One value with two significant digits: plain decimal, or m×10ⁿ when `plain` is false.
+fn value_text(v: f64, plain: bool) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return if v == 0.0 { "0".into() } else { v.to_string() };
+    }
+    let (e, m) = sci(v, 2);
+    let mant_dec = if (m * 10.0).round() % 10.0 == 0.0 {
+        0
+    } else {
+        1
     };
-    let all: Vec<(f64, f64)> = p.series.iter().flat_map(pts).collect();
+    if plain {
+        fixed(m * 10f64.powi(e), (mant_dec - e).max(0) as usize)
+    } else if m == 1.0 {
+        format!("10{}", superscript(e))
+    } else if m == -1.0 {
+        format!("−10{}", superscript(e))
+    } else {
+        format!("{}×10{}", fixed(m, mant_dec as usize), superscript(e))
+    }
+}
+
+/// Whether values whose decimal exponents lie in `lo ..= hi` read well as plain decimals.
+fn plain_range(lo: i32, hi: i32) -> bool {
+    lo >= -3 && hi <= 4
+}
+
+/// A tick: position in plot coordinates (log10 of the value on log axes) and its label.
+type Tick = (f64, String);
+
+/// Round linear ticks in [lo, hi], about `n` of them.
+fn linear_ticks(lo: f64, hi: f64, n: usize) -> Vec<Tick> {
+    let raw = (hi - lo) / n.max(1) as f64;
+    if !(raw > 0.0 && raw.is_finite()) {
+        return vec![];
+    }
+    let mut e = raw.log10().floor() as i32;
+    let f = raw / 10f64.powi(e);
+    let mut m = [1.0, 2.0, 2.5, 5.0, 10.0]
+        .into_iter()
+        .find(|&m| f <= m * (1.0 + 1e-9))
+        .unwrap_or(10.0);
+    if m == 10.0 {
+        m = 1.0;
+        e += 1;
+    }
+    let step = m * 10f64.powi(e);
+    let first = (lo / step - 1e-9).ceil() as i64;
+    let last = (hi / step + 1e-9).floor() as i64;
+    let vals: Vec<f64> = (first..=last).map(|i| i as f64 * step).collect();
+    let extra = i32::from(m == 2.5);
+    let amax = vals.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    if amax >= 1e5 || (amax > 0.0 && amax < 1e-3) {
+        let p = amax.log10().floor() as i32;
+        let dec = (p - e + extra).max(0) as usize;
+        vals.iter()
+            .map(|&v| {
+                let t = if v.abs() < 1e-9 * step {
+                    "0".to_string()
+                } else {
+                    format!("{}×10{}", fixed(v / 10f64.powi(p), dec), superscript(p))
+                };
+                (v, t)
+            })
+            .collect()
+    } else {
+        let dec = (extra - e).max(0) as usize;
+        vals.iter().map(|&v| (v, fixed(v, dec))).collect()
+    }
+}
+
+/// Ticks of a log axis spanning log10 values [lo, hi], at most about `n`, and the light grid
+/// lines (2 … 9 × 10ⁿ) when every decade is ticked.
+fn log_ticks(lo: f64, hi: f64, n: usize) -> (Vec<Tick>, Vec<f64>) {
+    let (a, b) = ((lo - 1e-9).ceil() as i32, (hi + 1e-9).floor() as i32);
+    // Up to two decades in view: 1-2-5 × 10ⁿ when they fit.
+    if b - a <= 1 {
+        let mut v = Vec::new();
+        for d in (lo.floor() as i32)..=(hi.ceil() as i32) {
+            for k in [1.0, 2.0, 5.0] {
+                let x = (k * 10f64.powi(d)).log10();
+                if x >= lo - 1e-12 && x <= hi + 1e-12 {
+                    v.push((x, k, d));
+                }
+            }
+        }
+        if v.len() >= 2 && v.len() <= n.max(2) + 1 {
+            let plain = plain_range(v[0].2, v[v.len() - 1].2);
+            let ticks = v
+                .iter()
+                .map(|&(x, k, d)| (x, value_text(k * 10f64.powi(d), plain)))
+                .collect();
+            return (ticks, vec![]);
+        }
+    }
+    if b - a >= 1 {
+        let count = (b - a + 1) as usize;
+        let stride = count.div_ceil(n.max(2)).max(1) as i32;
+        let plain = plain_range(a, b);
+        let ticks: Vec<Tick> = (a..=b)
+            .filter(|d| d.rem_euclid(stride) == 0)
+            .map(|d| {
+                let t = if plain {
+                    fixed(10f64.powi(d), (-d).max(0) as usize)
+                } else {
+                    format!("10{}", superscript(d))
+                };
+                (f64::from(d), t)
+            })
+            .collect();
+        let mut light = Vec::new();
+        if stride == 1 && count <= 8 {
+            for d in (a - 1)..=b {
+                for k in 2..=9 {
+                    let x = f64::from(d) + f64::from(k).log10();
+                    if x >= lo && x <= hi {
+                        light.push(x);
+                    }
+                }
+            }
+        }
+        return (ticks, light);
+    }
+    let lin = linear_ticks(10f64.powf(lo), 10f64.powf(hi), n);
+    (
+        lin.into_iter()
+            .filter(|t| t.0 > 0.0)
+            .map(|(x, t)| (x.log10(), t))
+            .collect(),
+        vec![],
+    )
+}
+
+/// Ticks and light lines of an axis over plot coordinates [lo, hi] whose labels (em `em`)
+/// fit in `length` pixels: along the axis when `horizontal`, else stacked.
+fn axis_ticks(
+    lo: f64,
+    hi: f64,
+    log: bool,
+    length: f64,
+    em: f64,
+    horizontal: bool,
+) -> (Vec<Tick>, Vec<f64>) {
+    let make = |n: usize| {
+        if log {
+            log_ticks(lo, hi, n)
+        } else {
+            let t = linear_ticks(lo, hi, n);
+            let light = if t.len() >= 2 {
+                let h = 0.5 * (t[1].0 - t[0].0);
+                std::iter::once(t[0].0 - h)
+                    .chain(t.iter().map(|x| x.0 + h))
+                    .filter(|&x| x >= lo && x <= hi)
+                    .collect()
+            } else {
+                vec![]
+            };
+            (t, light)
+        }
+    };
+    let fits = |t: &[Tick]| {
+        let need: f64 = if horizontal {
+            t.iter().map(|x| text::width(&x.1, em) + 1.2 * em).sum()
+        } else {
+            t.len() as f64 * 1.8 * em
+        };
+        need <= length
+    };
+    // The most ticks (at most 10) whose labels fit; at least two if possible.
+    let mut fallback = None;
+    for n in (2..=10).rev() {
+        let (t, l) = make(n);
+        if t.len() >= 2 && fits(&t) {
+            return (t, l);
+        }
+        if !t.is_empty()
+            && fallback
+                .as_ref()
+                .is_none_or(|f: &(Vec<Tick>, Vec<f64>)| t.len() < f.0.len())
+        {
+            fallback = Some((t, l));
+        }
+    }
+    fallback.unwrap_or_default()
+}
+
+/// Grid values as ticks, thinned to every k-th so that the labels fit.
+fn grid_ticks(vals: &[f64], log: bool, length: f64, em: f64, horizontal: bool) -> Vec<Tick> {
+    let exps: Vec<i32> = vals
+        .iter()
+        .map(|&v| 10f64.powf(tr_inv(v, log)))
+        .filter(|v| *v != 0.0)
+        .map(|v| v.abs().log10().floor() as i32)
+        .collect();
+    let plain = plain_range(
+        exps.iter().copied().min().unwrap_or(0),
+        exps.iter().copied().max().unwrap_or(0),
+    );
+    let all: Vec<Tick> = vals
+        .iter()
+        .map(|&v| (v, value_text(tr_inv_value(v, log), plain)))
+        .collect();
+    for k in 1..=all.len().max(1) {
+        let t: Vec<Tick> = all.iter().step_by(k).cloned().collect();
+        let need: f64 = if horizontal {
+            t.iter().map(|x| text::width(&x.1, em) + em).sum()
+        } else {
+            t.len() as f64 * 1.6 * em
+        };
+        if need <= length {
+            return t;
+        }
+    }
+    all.into_iter().take(1).collect()
+}
+
+fn tr_inv_value(v: f64, log: bool) -> f64 {
+    if log {
+        10f64.powf(v)
+    } else {
+        v
+    }
+}
+
+fn tr_inv(v: f64, log: bool) -> f64 {
+    // log10 of the value, for the exponent (0 for a zero value).
+    let x = tr_inv_value(v, log).abs();
+    if x > 0.0 {
+        x.log10()
+    } else {
+        0.0
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Sizes and layout.
+
+/// Text and stroke sizes of a figure, pixels, from its width.
+#[derive(Debug, Clone, Copy)]
+struct Sz {
+    w: f64,
+    /// Ticks, legends, captions, cell labels (em).
+    base: f64,
+    /// Axis descriptions (em).
+    label: f64,
+    /// Panel titles (em).
+    title: f64,
+    gap: f64,
+    /// Stroke and marker scale (1 at 900 px).
+    k: f64,
+}
+
+impl Sz {
+    fn new(width: u32) -> Sz {
+        let w = f64::from(width.max(100));
+        let base = (0.035 * w).ceil();
+        Sz {
+            w,
+            base,
+            label: (1.06 * base).round(),
+            title: (1.12 * base).round(),
+            gap: (0.45 * base).round(),
+            k: w / 900.0,
+        }
+    }
+    fn stroke(&self, w: u32) -> u32 {
+        ((f64::from(w) * self.k).round() as u32).max(1)
+    }
+    fn marker(&self) -> i32 {
+        (4.5 * self.k).round().max(2.0) as i32
+    }
+    fn tick(&self) -> i32 {
+        (0.25 * self.base).round() as i32
+    }
+}
+
+/// Height of one line of text at em `em`.
+fn line_h(em: f64) -> f64 {
+    1.3 * em
+}
+
+/// Height of a single text line's ink box (capitals + descenders) at em `em`.
+fn ink_h(em: f64) -> f64 {
+    0.97 * em
+}
+
+/// Greedy word wrap to `width` pixels at em `em`.
+fn wrap(s: &str, em: f64, width: f64) -> Vec<String> {
+    let mut lines: Vec<String> = Vec::new();
+    let mut cur = String::new();
+    for w in s.split_whitespace() {
+        let cand = if cur.is_empty() {
+            w.to_string()
+        } else {
+            format!("{cur} {w}")
+        };
+        if !cur.is_empty() && text::width(&cand, em) > width {
+            lines.push(std::mem::take(&mut cur));
+            cur = w.to_string();
+        } else {
+            cur = cand;
+        }
+    }
+    if !cur.is_empty() {
+        lines.push(cur);
+    }
+    lines
+}
+
+/// A legend entry: what the series looks like and its name.
+#[derive(Debug, Clone, PartialEq)]
+struct Entry {
+    name: String,
+    color: usize,
+    line: bool,
+    dashed: bool,
+    thin: bool,
+    marker: Marker,
+}
+
+fn entries(p: &Panel) -> Vec<Entry> {
+    let mut v: Vec<Entry> = p
+        .vlines
+        .iter()
+        .map(|l| Entry {
+            name: l.label.clone(),
+            color: l.color,
+            line: true,
+            dashed: true,
+            thin: true,
+            marker: Marker::None,
+        })
+        .collect();
+    v.extend(
+        p.series
+            .iter()
+            .filter(|s| !s.name.is_empty())
+            .map(|s| Entry {
+                name: s.name.clone(),
+                color: s.color,
+                line: s.line,
+                dashed: s.dashed,
+                thin: s.width <= 1,
+                marker: s.marker,
+            }),
+    );
+    v
+}
+
+/// Legend entries flowed into rows of at most `width` pixels: (rows of entry indices, row
+/// widths).
+fn legend_rows(e: &[Entry], sz: &Sz, width: f64) -> Vec<(Vec<usize>, f64)> {
+    let mut rows: Vec<(Vec<usize>, f64)> = Vec::new();
+    let mut cur: (Vec<usize>, f64) = (vec![], 0.0);
+    for (i, en) in e.iter().enumerate() {
+        let w = entry_w(en, sz);
+        let sep = if cur.0.is_empty() { 0.0 } else { 1.2 * sz.base };
+        if !cur.0.is_empty() && cur.1 + sep + w > width {
+            rows.push(std::mem::take(&mut cur));
+            cur.0.push(i);
+            cur.1 = w;
+        } else {
+            cur.0.push(i);
+            cur.1 += sep + w;
+        }
+    }
+    if !cur.0.is_empty() {
+        rows.push(cur);
+    }
+    rows
+}
+
+fn sample_w(sz: &Sz) -> f64 {
+    2.0 * sz.base
+}
+
+fn entry_w(e: &Entry, sz: &Sz) -> f64 {
+    sample_w(sz) + 0.4 * sz.base + text::width(&e.name, sz.base)
+}
+
+fn legend_h(rows: usize, sz: &Sz) -> f64 {
+    if rows == 0 {
+        0.0
+    } else {
+        rows as f64 * line_h(sz.base) + sz.gap
+    }
+}
+
+/// The plot ranges of an x–y panel in plot coordinates.
+fn xy_ranges(p: &Panel) -> ((f64, f64), (f64, f64)) {
+    let all: Vec<(f64, f64)> = p.series.iter().flat_map(|s| xy_points(p, s)).collect();
     let xr = p
         .x_range
         .map(|(a, b)| (tr(a, p.log_x), tr(b, p.log_x)))
@@ -235,155 +656,15 @@ fn draw_xy<DB: DrawingBackend>(
         .map(|(a, b)| (tr(a, p.log_y), tr(b, p.log_y)))
         .or_else(|| bounds(all.iter().map(|q| q.1)))
         .unwrap_or((0.0, 1.0));
-    let mut chart = ChartBuilder::on(area)
-        .caption(&p.title, ("sans-serif", 17))
-        .margin(8)
-        .x_label_area_size(40)
-        .y_label_area_size(62)
-        .build_cartesian_2d(xr.0..xr.1, yr.0..yr.1)
-        .map_err(err)?;
-    let (lx, ly) = (p.log_x, p.log_y);
-    let xf = move |v: &f64| tick_label(*v, lx);
-    let yf = move |v: &f64| tick_label(*v, ly);
-    chart
-        .configure_mesh()
-        .x_desc(p.x_label.as_str())
-        .y_desc(p.y_label.as_str())
-        .x_label_formatter(&xf)
-        .y_label_formatter(&yf)
-        .label_style(("sans-serif", 13))
-        .axis_desc_style(("sans-serif", 14))
-        .light_line_style(RGBColor(235, 235, 235))
-        .bold_line_style(RGBColor(215, 215, 215))
-        .draw()
-        .map_err(err)?;
-    for v in &p.vlines {
-        let x = tr(v.x, p.log_x);
-        if !x.is_finite() {
-            continue;
-        }
-        let c = color(v.color);
-        chart
-            .draw_series(DashedLineSeries::new(
-                vec![(x, yr.0), (x, yr.1)],
-                6,
-                4,
-                c.stroke_width(1),
-            ))
-            .map_err(err)?
-            .label(v.label.clone())
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(1)));
-    }
-    for s in &p.series {
-        let c = color(s.color);
-        let data = pts(s);
-        let style = c.stroke_width(s.width);
-        let named = !s.name.is_empty();
-        let name = s.name.clone();
-        if s.line {
-            let a = if s.dashed {
-                chart
-                    .draw_series(DashedLineSeries::new(data.clone(), 8, 5, style))
-                    .map_err(err)?
-            } else {
-                chart
-                    .draw_series(LineSeries::new(data.clone(), style))
-                    .map_err(err)?
-            };
-            if named {
-                a.label(name.clone()).legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(2))
-                });
-            }
-        }
-        let label_markers = named && !s.line;
-        let ms = 4;
-        match s.marker {
-            Marker::None => {}
-            Marker::Circle => {
-                let a = chart
-                    .draw_series(data.iter().map(|&q| Circle::new(q, ms, c.filled())))
-                    .map_err(err)?;
-                if label_markers {
-                    a.label(name.clone())
-                        .legend(move |(x, y)| Circle::new((x + 9, y), 4, c.filled()));
-                }
-            }
-            Marker::Square => {
-                let a = chart
-                    .draw_series(data.iter().map(|&q| {
-                        EmptyElement::at(q) + Rectangle::new([(-ms, -ms), (ms, ms)], c.filled())
-                    }))
-                    .map_err(err)?;
-                if label_markers {
-                    a.label(name.clone()).legend(move |(x, y)| {
-                        Rectangle::new([(x + 5, y - 4), (x + 13, y + 4)], c.filled())
-                    });
-                }
-            }
-            Marker::Triangle => {
-                let a = chart
-                    .draw_series(
-                        data.iter()
-                            .map(|&q| TriangleMarker::new(q, ms + 1, c.filled())),
-                    )
-                    .map_err(err)?;
-                if label_markers {
-                    a.label(name.clone())
-                        .legend(move |(x, y)| TriangleMarker::new((x + 9, y), 5, c.filled()));
-                }
-            }
-            Marker::Cross => {
-                let a = chart
-                    .draw_series(data.iter().map(|&q| Cross::new(q, ms, c.stroke_width(2))))
-                    .map_err(err)?;
-                if label_markers {
-                    a.label(name.clone())
-                        .legend(move |(x, y)| Cross::new((x + 9, y), 4, c.stroke_width(2)));
-                }
-            }
-        }
-    }
-    if !p.no_legend && (p.series.iter().any(|s| !s.name.is_empty()) || !p.vlines.is_empty()) {
-        chart
-            .configure_series_labels()
-            .position(if p.legend_right {
-                SeriesLabelPosition::UpperRight
-            } else {
-                SeriesLabelPosition::UpperLeft
-            })
-            .label_font(("sans-serif", 12))
-            .background_style(WHITE.mix(0.85))
-            .border_style(RGBColor(160, 160, 160))
-            .draw()
-            .map_err(err)?;
-    }
-    Ok(())
+    (xr, yr)
 }
 
-/// Viridis-like colour for t in [0, 1].
-pub fn ramp(t: f64) -> RGBColor {
-    const STOPS: [(f64, (f64, f64, f64)); 5] = [
-        (0.0, (68.0, 1.0, 84.0)),
-        (0.25, (59.0, 82.0, 139.0)),
-        (0.5, (33.0, 145.0, 140.0)),
-        (0.75, (94.0, 201.0, 98.0)),
-        (1.0, (253.0, 231.0, 37.0)),
-    ];
-    let t = if t.is_finite() {
-        t.clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    for w in STOPS.windows(2) {
-        let ((a, ca), (b, cb)) = (w[0], w[1]);
-        if t <= b {
-            let s = (t - a) / (b - a);
-            let m = |x: f64, y: f64| (x + s * (y - x)).round() as u8;
-            return RGBColor(m(ca.0, cb.0), m(ca.1, cb.1), m(ca.2, cb.2));
-        }
-    }
-    RGBColor(253, 231, 37)
+fn xy_points(p: &Panel, s: &Series) -> Vec<(f64, f64)> {
+    s.points
+        .iter()
+        .map(|&(x, y)| (tr(x, p.log_x), tr(y, p.log_y)))
+        .filter(|(x, y)| x.is_finite() && y.is_finite())
+        .collect()
 }
 
 /// Distinct sorted grid values with the edges of their cells: (value, low edge, high edge),
@@ -414,9 +695,669 @@ fn cell_edges(v: &[f64]) -> Vec<(f64, f64, f64)> {
         .collect()
 }
 
-fn draw_heat<DB: DrawingBackend>(
-    area: &DrawingArea<DB, Shift>,
+/// Everything needed to draw one panel in its box.
+struct PanelLayout {
+    title: Vec<String>,
+    title_h: f64,
+    /// Entries drawn below this panel (empty when shared or none).
+    legend: Vec<Entry>,
+    legend_rows: Vec<(Vec<usize>, f64)>,
+    xr: (f64, f64),
+    yr: (f64, f64),
+    xt: Vec<Tick>,
+    yt: Vec<Tick>,
+    xl: Vec<f64>,
+    yl: Vec<f64>,
+    /// Axis descriptions wrapped to lines.
+    x_desc: Vec<String>,
+    y_desc: Vec<String>,
+    y_area: f64,
+    x_area: f64,
+    top: f64,
+    right: f64,
+    /// Heat maps: colour bar (ticks in plot coordinates of the value, width of the block).
+    bar: Option<(Vec<Tick>, f64)>,
+    plot_h: f64,
+}
+
+/// Lays a panel out in a box `pw` wide; `plot_h`: the plot height, or None to take
+/// `aspect` × the plot width.
+fn layout_panel(
+    kind: &PanelKind,
+    shared: bool,
+    pw: f64,
+    plot_h: Option<f64>,
+    aspect: f64,
+    sz: &Sz,
+) -> PanelLayout {
+    let (title_s, log_x, log_y) = match kind {
+        PanelKind::Xy(p) => (&p.title, p.log_x, p.log_y),
+        PanelKind::Heat(h) => (&h.title, h.log_x, h.log_y),
+    };
+    let title = wrap(title_s, sz.title, pw - 2.0 * sz.gap);
+    let title_h = if title.is_empty() {
+        sz.gap
+    } else {
+        title.len() as f64 * line_h(sz.title) + 0.5 * sz.gap
+    };
+    let (legend, xr, yr, grid) = match kind {
+        PanelKind::Xy(p) => {
+            let l = if shared || p.no_legend {
+                vec![]
+            } else {
+                entries(p)
+            };
+            let (xr, yr) = xy_ranges(p);
+            (l, xr, yr, None)
+        }
+        PanelKind::Heat(h) => {
+            let xs: Vec<f64> = h.cells.iter().map(|c| tr(c.0, h.log_x)).collect();
+            let ys: Vec<f64> = h.cells.iter().map(|c| tr(c.1, h.log_y)).collect();
+            let (xe, ye) = (cell_edges(&xs), cell_edges(&ys));
+            let xr = (
+                xe.first().map_or(0.0, |c| c.1),
+                xe.last().map_or(1.0, |c| c.2),
+            );
+            let yr = (
+                ye.first().map_or(0.0, |c| c.1),
+                ye.last().map_or(1.0, |c| c.2),
+            );
+            let gx: Vec<f64> = xe.iter().map(|c| c.0).collect();
+            let gy: Vec<f64> = ye.iter().map(|c| c.0).collect();
+            (vec![], xr, yr, Some((gx, gy, h)))
+        }
+    };
+    let legend_rows = legend_rows(&legend, sz, pw - 2.0 * sz.gap);
+    let tick = f64::from(sz.tick());
+    let (x_s, y_s) = match kind {
+        PanelKind::Xy(p) => (p.x_label.as_str(), p.y_label.as_str()),
+        PanelKind::Heat(h) => (h.x_label.as_str(), h.y_label.as_str()),
+    };
+    let x_desc = wrap(x_s, sz.label, pw - 2.0 * sz.gap);
+    let desc_h = |n: usize| {
+        if n == 0 {
+            0.0
+        } else {
+            0.6 * sz.gap + (n - 1) as f64 * line_h(sz.label) + ink_h(sz.label)
+        }
+    };
+    let x_area = 2.0 * tick + ink_h(sz.base) + desc_h(x_desc.len()) + 0.3 * sz.gap;
+    let top = 0.6 * sz.base;
+    let bar_w = |ticks: &[Tick], label: bool| {
+        let tw = ticks
+            .iter()
+            .map(|t| text::width(&t.1, sz.base))
+            .fold(0.0, f64::max);
+        sz.gap
+            + 0.7 * sz.base
+            + tick
+            + 0.3 * sz.gap
+            + tw
+            + if label { sz.gap + ink_h(sz.label) } else { 0.0 }
+            + 0.3 * sz.gap
+    };
+    let ticks_for = |plot_w: f64, plot_h: f64| {
+        let (xt, xl, yt, yl) = match &grid {
+            None => {
+                let (xt, xl) = axis_ticks(xr.0, xr.1, log_x, plot_w, sz.base, true);
+                let (yt, yl) = axis_ticks(yr.0, yr.1, log_y, plot_h, sz.base, false);
+                (xt, xl, yt, yl)
+            }
+            Some((gx, gy, _)) => (
+                grid_ticks(gx, log_x, plot_w, sz.base, true),
+                vec![],
+                grid_ticks(gy, log_y, plot_h, sz.base, false),
+                vec![],
+            ),
+        };
+        let bar = grid.as_ref().map(|(_, _, h)| {
+            let (lo, hi) = (
+                tr(h.value_range.0, h.log_value),
+                tr(h.value_range.1, h.log_value),
+            );
+            let (t, _) = axis_ticks(lo.min(hi), lo.max(hi), h.log_value, plot_h, sz.base, false);
+            let w = bar_w(&t, !h.value_label.is_empty());
+            (t, w)
+        });
+        (xt, xl, yt, yl, bar)
+    };
+    // First pass with a provisional plot size, second with the final one.
+    let guess_w = 0.7 * pw;
+    let guess_h = plot_h.unwrap_or(aspect * guess_w);
+    // The y description may reach down beside the x tick labels.
+    let y_desc = wrap(y_s, sz.label, guess_h + 0.6 * x_area);
+    let y_area_of = |yt: &[Tick]| {
+        let tw = yt
+            .iter()
+            .map(|t| text::width(&t.1, sz.base))
+            .fold(0.0, f64::max);
+        sz.gap + desc_h(y_desc.len()) + tw + 2.0 * tick
+    };
+    let (_, _, yt0, _, bar0) = ticks_for(guess_w, guess_h);
+    let y_area = y_area_of(&yt0);
+    let bar_space = bar0.as_ref().map_or(0.0, |b| b.1);
+    let mut right = 0.0f64;
+    let plot_w0 = pw - y_area - bar_space - sz.gap;
+    let (xt0, ..) = ticks_for(plot_w0, guess_h);
+    if let Some(last) = xt0.last() {
+        // Half the last x label may stick out to the right of the plot.
+        let over = 0.5 * text::width(&last.1, sz.base) - (xr.1 - last.0) / (xr.1 - xr.0) * plot_w0;
+        right = right.max(over);
+    }
+    right = right.max(sz.gap) + bar_space;
+    let plot_w = (pw - y_area - right).max(10.0);
+    let plot_h = plot_h.unwrap_or(aspect * plot_w).max(10.0);
+    let (xt, xl, yt, yl, bar) = ticks_for(plot_w, plot_h);
+    let y_area = y_area.max(y_area_of(&yt));
+    PanelLayout {
+        title,
+        title_h,
+        legend,
+        legend_rows,
+        xr,
+        yr,
+        xt,
+        yt,
+        xl,
+        yl,
+        x_desc,
+        y_desc,
+        y_area,
+        x_area,
+        top,
+        right,
+        bar,
+        plot_h,
+    }
+}
+
+/// One legend for all panels: the distinct entries of every panel, when some entry appears in
+/// more than one panel and no two distinct entries look alike (same colour, line and
+/// marker); empty otherwise (each panel keeps its own legend).
+fn shared_legend(lists: &[Vec<Entry>]) -> Vec<Entry> {
+    if lists.len() < 2 {
+        return vec![];
+    }
+    let mut union: Vec<Entry> = Vec::new();
+    let mut repeated = false;
+    for l in lists {
+        for e in l {
+            if union.contains(e) {
+                repeated = true;
+            } else {
+                union.push(e.clone());
+            }
+        }
+    }
+    let look = |e: &Entry| (e.color, e.line, e.dashed, e.marker);
+    let ambiguous = union
+        .iter()
+        .enumerate()
+        .any(|(i, a)| union[i + 1..].iter().any(|b| look(a) == look(b)));
+    if repeated && !ambiguous {
+        union
+    } else {
+        vec![]
+    }
+}
+
+/// The whole figure: panel boxes, shared legend, caption, height.
+struct Layout {
+    sz: Sz,
+    height: u32,
+    cols: usize,
+    pw: f64,
+    rows_h: Vec<f64>,
+    panels: Vec<PanelLayout>,
+    shared: Vec<Entry>,
+    shared_rows: Vec<(Vec<usize>, f64)>,
+    caption: Vec<String>,
+}
+
+fn layout(
+    size: (u32, u32),
+    rows: usize,
+    cols: usize,
+    panels: &[PanelKind],
+    caption: &str,
+) -> Layout {
+    let sz = Sz::new(size.0);
+    let cols = cols.max(1);
+    let rows = rows.max(panels.len().div_ceil(cols)).max(1);
+    let pw = sz.w / cols as f64;
+    // The plot aspect the caller's size asked for (its panels had ~80 px of decorations).
+    let req_ph = (f64::from(size.1) - if caption.is_empty() { 0.0 } else { 34.0 }) / rows as f64;
+    let aspect = ((req_ph - 80.0) / (pw - 80.0)).clamp(0.4, 0.85);
+    // One legend below all panels when every panel with a legend shows the same entries.
+    let lists: Vec<Vec<Entry>> = panels
+        .iter()
+        .filter_map(|k| match k {
+            PanelKind::Xy(p) if !p.no_legend => Some(entries(p)),
+            _ => None,
+        })
+        .filter(|e| !e.is_empty())
+        .collect();
+    let shared = shared_legend(&lists);
+    let is_shared = !shared.is_empty();
+    let first: Vec<PanelLayout> = panels
+        .iter()
+        .map(|k| layout_panel(k, is_shared, pw, None, aspect, &sz))
+        .collect();
+    // Align the panels of a row: the same title block, plot height and axis block, so the
+    // plots line up; legends below.
+    let mut rows_h = Vec::with_capacity(rows);
+    let mut panels_l: Vec<PanelLayout> = Vec::with_capacity(panels.len());
+    for r in 0..rows {
+        let idx: Vec<usize> = (r * cols..((r + 1) * cols).min(panels.len())).collect();
+        let max =
+            |f: &dyn Fn(&PanelLayout) -> f64| idx.iter().map(|&i| f(&first[i])).fold(0.0, f64::max);
+        let title_h = max(&|l| l.title_h);
+        let plot_h = max(&|l| l.plot_h).ceil();
+        let x_area = max(&|l| l.x_area);
+        let legend = max(&|l| legend_h(l.legend_rows.len(), &sz));
+        let top = max(&|l| l.top);
+        rows_h.push((title_h + top + plot_h + x_area + legend).ceil());
+        for &i in &idx {
+            let mut l = layout_panel(&panels[i], is_shared, pw, Some(plot_h), aspect, &sz);
+            l.title_h = title_h;
+            l.x_area = x_area;
+            panels_l.push(l);
+        }
+    }
+    let shared_rows = legend_rows(&shared, &sz, sz.w - 2.0 * sz.gap);
+    let caption = wrap(caption, sz.base, sz.w - 2.0 * sz.gap);
+    let cap_h = if caption.is_empty() {
+        0.0
+    } else {
+        caption.len() as f64 * line_h(sz.base) + sz.gap
+    };
+    let height = rows_h.iter().sum::<f64>() + legend_h(shared_rows.len(), &sz) + cap_h;
+    Layout {
+        sz,
+        height: height.ceil() as u32,
+        cols,
+        pw,
+        rows_h,
+        panels: panels_l,
+        shared,
+        shared_rows,
+        caption,
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Drawing.
+
+type DErr = String;
+
+fn err<E: std::fmt::Debug>(e: E) -> DErr {
+    format!("{e:?}")
+}
+
+type Root<'a, DB> = DrawingArea<DB, Shift>;
+
+fn text_style(em: f64, c: RGBColor, h: HPos, v: VPos) -> TextStyle<'static> {
+    ("sans-serif", em).into_font().color(&c).pos(Pos::new(h, v))
+}
+
+fn put<DB: DrawingBackend>(
+    root: &Root<DB>,
+    s: &str,
+    style: &TextStyle,
+    x: f64,
+    y: f64,
+) -> std::result::Result<(), DErr> {
+    root.draw_text(s, style, (x.round() as i32, y.round() as i32))
+        .map_err(err)
+}
+
+/// Draws legend rows with their top at `y`, centred in [x0, x0 + width].
+fn draw_legend<DB: DrawingBackend>(
+    root: &Root<DB>,
+    e: &[Entry],
+    rows: &[(Vec<usize>, f64)],
+    x0: f64,
+    width: f64,
+    y: f64,
+    sz: &Sz,
+) -> std::result::Result<(), DErr> {
+    let style = text_style(sz.base, BLACK, HPos::Left, VPos::Center);
+    let block = rows.iter().map(|r| r.1).fold(0.0, f64::max);
+    for (r, (idx, _)) in rows.iter().enumerate() {
+        let mut x = x0 + 0.5 * (width - block).max(0.0);
+        let yc = y + (r as f64 + 0.5) * line_h(sz.base);
+        for &i in idx {
+            let en = &e[i];
+            let c = color(en.color);
+            let (a, b) = (x.round() as i32, (x + sample_w(sz)).round() as i32);
+            let yi = yc.round() as i32;
+            let stroke = c.stroke_width(sz.stroke(if en.thin { 1 } else { 2 }));
+            if en.line {
+                if en.dashed {
+                    let d = (b - a) / 5;
+                    for s in [0, 2, 4] {
+                        root.draw(&PathElement::new(
+                            vec![(a + s * d, yi), (a + (s + 1) * d, yi)],
+                            stroke,
+                        ))
+                        .map_err(err)?;
+                    }
+                } else {
+                    root.draw(&PathElement::new(vec![(a, yi), (b, yi)], stroke))
+                        .map_err(err)?;
+                }
+            }
+            draw_marker(root, en.marker, ((a + b) / 2, yi), c, sz)?;
+            put(root, &en.name, &style, x + sample_w(sz) + 0.4 * sz.base, yc)?;
+            x += entry_w(en, sz) + 1.2 * sz.base;
+        }
+    }
+    Ok(())
+}
+
+fn draw_marker<DB: DrawingBackend>(
+    root: &Root<DB>,
+    m: Marker,
+    q: (i32, i32),
+    c: RGBColor,
+    sz: &Sz,
+) -> std::result::Result<(), DErr> {
+    let ms = sz.marker();
+    match m {
+        Marker::None => Ok(()),
+        Marker::Circle => root.draw(&Circle::new(q, ms, c.filled())).map_err(err),
+        Marker::Square => root
+            .draw(&Rectangle::new(
+                [(q.0 - ms, q.1 - ms), (q.0 + ms, q.1 + ms)],
+                c.filled(),
+            ))
+            .map_err(err),
+        Marker::Triangle => root
+            .draw(&TriangleMarker::new(q, ms + 1, c.filled()))
+            .map_err(err),
+        Marker::Cross => root
+            .draw(&Cross::new(q, ms, c.stroke_width(sz.stroke(2))))
+            .map_err(err),
+    }
+}
+
+fn lookup(t: &[Tick], v: f64) -> String {
+    t.iter()
+        .find(|x| (x.0 - v).abs() <= 1e-9 * (1.0 + v.abs()))
+        .map(|x| x.1.clone())
+        .unwrap_or_default()
+}
+
+/// Draws one panel in the box at (x0, y0) of width `pw`.
+fn draw_panel<DB: DrawingBackend>(
+    root: &Root<DB>,
+    kind: &PanelKind,
+    l: &PanelLayout,
+    (x0, y0): (f64, f64),
+    pw: f64,
+    sz: &Sz,
+) -> std::result::Result<(), DErr> {
+    let ts = text_style(sz.title, BLACK, HPos::Center, VPos::Top);
+    for (i, line) in l.title.iter().enumerate() {
+        put(
+            root,
+            line,
+            &ts,
+            x0 + 0.5 * pw,
+            y0 + 0.2 * sz.gap + i as f64 * line_h(sz.title),
+        )?;
+    }
+    let chart_y = y0 + l.title_h;
+    let chart_h = l.top + l.plot_h + l.x_area;
+    let area = root.clone().shrink(
+        (x0.round() as i32, chart_y.round() as i32),
+        (pw.round() as u32, chart_h.round() as u32),
+    );
+    let (xt, yt) = (l.xt.clone(), l.yt.clone());
+    let xkeys: Vec<f64> = xt.iter().map(|t| t.0).collect();
+    let ykeys: Vec<f64> = yt.iter().map(|t| t.0).collect();
+    let mut chart = ChartBuilder::on(&area)
+        .margin_top(l.top.round() as i32)
+        .margin_right(l.right.round() as i32)
+        .x_label_area_size(l.x_area.round() as i32)
+        .y_label_area_size(l.y_area.round() as i32)
+        .build_cartesian_2d(
+            Axis {
+                lo: l.xr.0,
+                hi: l.xr.1,
+                bold: xkeys,
+                light: l.xl.clone(),
+            },
+            Axis {
+                lo: l.yr.0,
+                hi: l.yr.1,
+                bold: ykeys,
+                light: l.yl.clone(),
+            },
+        )
+        .map_err(err)?;
+    let xf = move |v: &f64| lookup(&xt, *v);
+    let yf = move |v: &f64| lookup(&yt, *v);
+    let heat = matches!(kind, PanelKind::Heat(_));
+    let mut mesh = chart.configure_mesh();
+    mesh.x_labels(1000)
+        .y_labels(1000)
+        .x_label_formatter(&xf)
+        .y_label_formatter(&yf)
+        .label_style(("sans-serif", sz.base))
+        .axis_desc_style(("sans-serif", sz.label))
+        .set_all_tick_mark_size(sz.tick())
+        .axis_style(BLACK.stroke_width(sz.stroke(1)))
+        .light_line_style(RGBColor(238, 238, 238).stroke_width(sz.stroke(1)))
+        .bold_line_style(RGBColor(212, 212, 212).stroke_width(sz.stroke(1)));
+    if heat {
+        mesh.disable_mesh();
+    }
+    mesh.draw().map_err(err)?;
+    match kind {
+        PanelKind::Xy(p) => draw_xy_series(&mut chart, p, l, sz)?,
+        PanelKind::Heat(h) => draw_heat_cells(&mut chart, h, sz)?,
+    }
+    let (px, py) = chart.plotting_area().get_pixel_range();
+    // Frame the plot.
+    root.draw(&Rectangle::new(
+        [(px.start, py.start), (px.end, py.end)],
+        BLACK.stroke_width(sz.stroke(1)),
+    ))
+    .map_err(err)?;
+    // Axis descriptions: x centred under the plot (kept inside the panel), y rotated and
+    // centred beside it, first line leftmost.
+    let tick = f64::from(sz.tick());
+    let xs = text_style(sz.label, BLACK, HPos::Center, VPos::Top);
+    let plot_cx = 0.5 * f64::from(px.start + px.end);
+    for (i, line) in l.x_desc.iter().enumerate() {
+        let hw = 0.5 * text::width(line, sz.label);
+        let cx = plot_cx.min(x0 + pw - sz.gap - hw).max(x0 + sz.gap + hw);
+        let y = f64::from(py.end)
+            + 2.0 * tick
+            + ink_h(sz.base)
+            + 0.6 * sz.gap
+            + i as f64 * line_h(sz.label);
+        put(root, line, &xs, cx, y)?;
+    }
+    let ys =
+        text_style(sz.label, BLACK, HPos::Center, VPos::Top).transform(FontTransform::Rotate270);
+    let plot_cy = 0.5 * f64::from(py.start + py.end);
+    for (i, line) in l.y_desc.iter().enumerate() {
+        let hw = 0.5 * text::width(line, sz.label);
+        let cy = plot_cy.min(chart_y + chart_h - hw).max(chart_y + hw);
+        put(
+            root,
+            line,
+            &ys,
+            x0 + sz.gap + i as f64 * line_h(sz.label),
+            cy,
+        )?;
+    }
+    if let (PanelKind::Heat(h), Some((bt, _))) = (kind, &l.bar) {
+        draw_bar(root, h, bt, (px.end, py.clone()), x0 + pw, sz)?;
+    }
+    if !l.legend.is_empty() {
+        draw_legend(
+            root,
+            &l.legend,
+            &l.legend_rows,
+            x0 + sz.gap,
+            pw - 2.0 * sz.gap,
+            chart_y + chart_h + 0.3 * sz.gap,
+            sz,
+        )?;
+    }
+    Ok(())
+}
+
+/// A linear axis over [lo, hi] (plot coordinates) with the ticks chosen here.
+#[derive(Clone)]
+struct Axis {
+    lo: f64,
+    hi: f64,
+    bold: Vec<f64>,
+    light: Vec<f64>,
+}
+
+impl Ranged for Axis {
+    type FormatOption = plotters::coord::ranged1d::DefaultFormatting;
+    type ValueType = f64;
+    fn map(&self, v: &f64, limit: (i32, i32)) -> i32 {
+        let t = (v - self.lo) / (self.hi - self.lo);
+        (f64::from(limit.0) + t * f64::from(limit.1 - limit.0)).round() as i32
+    }
+    fn key_points<H: plotters::coord::ranged1d::KeyPointHint>(&self, hint: H) -> Vec<f64> {
+        if hint.weight().allow_light_points() {
+            self.light.clone()
+        } else {
+            self.bold.clone()
+        }
+    }
+    fn range(&self) -> std::ops::Range<f64> {
+        self.lo..self.hi
+    }
+}
+
+type Chart<'a, DB> = ChartContext<'a, DB, Cartesian2d<Axis, Axis>>;
+
+fn draw_xy_series<DB: DrawingBackend>(
+    chart: &mut Chart<DB>,
+    p: &Panel,
+    l: &PanelLayout,
+    sz: &Sz,
+) -> std::result::Result<(), DErr> {
+    let (yr0, yr1) = l.yr;
+    let dash = |n: f64| (n * sz.k).round().max(1.0) as u32;
+    for v in &p.vlines {
+        let x = tr(v.x, p.log_x);
+        if !x.is_finite() {
+            continue;
+        }
+        let c = color(v.color);
+        chart
+            .draw_series(DashedLineSeries::new(
+                vec![(x, yr0), (x, yr1)],
+                dash(7.0),
+                dash(5.0),
+                c.stroke_width(sz.stroke(1)),
+            ))
+            .map_err(err)?;
+    }
+    let ms = sz.marker();
+    for s in &p.series {
+        let c = color(s.color);
+        let data = xy_points(p, s);
+        let style = c.stroke_width(sz.stroke(s.width));
+        if s.line {
+            if s.dashed {
+                chart
+                    .draw_series(DashedLineSeries::new(
+                        data.clone(),
+                        dash(9.0),
+                        dash(6.0),
+                        style,
+                    ))
+                    .map_err(err)?;
+            } else {
+                chart
+                    .draw_series(LineSeries::new(data.clone(), style))
+                    .map_err(err)?;
+            }
+        }
+        match s.marker {
+            Marker::None => {}
+            Marker::Circle => {
+                chart
+                    .draw_series(data.iter().map(|&q| Circle::new(q, ms, c.filled())))
+                    .map_err(err)?;
+            }
+            Marker::Square => {
+                chart
+                    .draw_series(data.iter().map(|&q| {
+                        EmptyElement::at(q) + Rectangle::new([(-ms, -ms), (ms, ms)], c.filled())
+                    }))
+                    .map_err(err)?;
+            }
+            Marker::Triangle => {
+                chart
+                    .draw_series(
+                        data.iter()
+                            .map(|&q| TriangleMarker::new(q, ms + 1, c.filled())),
+                    )
+                    .map_err(err)?;
+            }
+            Marker::Cross => {
+                chart
+                    .draw_series(
+                        data.iter()
+                            .map(|&q| Cross::new(q, ms, c.stroke_width(sz.stroke(2)))),
+                    )
+                    .map_err(err)?;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Viridis-like colour for t in [0, 1].
+pub fn ramp(t: f64) -> RGBColor {
+    const STOPS: [(f64, (f64, f64, f64)); 5] = [
+        (0.0, (68.0, 1.0, 84.0)),
+        (0.25, (59.0, 82.0, 139.0)),
+        (0.5, (33.0, 145.0, 140.0)),
+        (0.75, (94.0, 201.0, 98.0)),
+        (1.0, (253.0, 231.0, 37.0)),
+    ];
+    let t = if t.is_finite() {
+        t.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    for w in STOPS.windows(2) {
+        let ((a, ca), (b, cb)) = (w[0], w[1]);
+        if t <= b {
+            let s = (t - a) / (b - a);
+            let m = |x: f64, y: f64| (x + s * (y - x)).round() as u8;
+            return RGBColor(m(ca.0, cb.0), m(ca.1, cb.1), m(ca.2, cb.2));
+        }
+    }
+    RGBColor(253, 231, 37)
+}
+
+/// Position of a value on the colour scale, 0 … 1 (unclamped).
+fn scale_pos(h: &Heat, v: f64) -> f64 {
+    let (lo, hi) = (
+        tr(h.value_range.0, h.log_value),
+        tr(h.value_range.1, h.log_value),
+    );
+    (tr(if h.log_value { v.max(1e-300) } else { v }, h.log_value) - lo) / (hi - lo)
+}
+
+fn draw_heat_cells<DB: DrawingBackend>(
+    chart: &mut Chart<DB>,
     h: &Heat,
+    sz: &Sz,
 ) -> std::result::Result<(), DErr> {
     let xs: Vec<f64> = h.cells.iter().map(|c| tr(c.0, h.log_x)).collect();
     let ys: Vec<f64> = h.cells.iter().map(|c| tr(c.1, h.log_y)).collect();
@@ -428,43 +1369,32 @@ fn draw_heat<DB: DrawingBackend>(
             .find(|c| c.0 == v)
             .map_or((v - 0.5, v + 0.5), |c| (c.1, c.2))
     };
-    let x0 = xe.first().map_or(0.0, |c| c.1);
-    let x1 = xe.last().map_or(1.0, |c| c.2);
-    let y0 = ye.first().map_or(0.0, |c| c.1);
-    let y1 = ye.last().map_or(1.0, |c| c.2);
-    let mut chart = ChartBuilder::on(area)
-        .caption(&h.title, ("sans-serif", 17))
-        .margin(8)
-        .x_label_area_size(40)
-        .y_label_area_size(62)
-        .build_cartesian_2d(x0..x1, y0..y1)
-        .map_err(err)?;
-    let (lx, ly) = (h.log_x, h.log_y);
-    let xf = move |v: &f64| tick_label(*v, lx);
-    let yf = move |v: &f64| tick_label(*v, ly);
-    chart
-        .configure_mesh()
-        .disable_mesh()
-        .x_desc(h.x_label.as_str())
-        .y_desc(h.y_label.as_str())
-        .x_label_formatter(&xf)
-        .y_label_formatter(&yf)
-        .label_style(("sans-serif", 13))
-        .axis_desc_style(("sans-serif", 14))
-        .draw()
-        .map_err(err)?;
-    let (lo, hi) = (
-        tr(h.value_range.0, h.log_value),
-        tr(h.value_range.1, h.log_value),
-    );
+    // Cell labels only when every label fits its cell.
+    let labels: Vec<Option<String>> = h
+        .cells
+        .iter()
+        .map(|c| c.2.filter(|v| v.is_finite()).map(|v| value_text(v, false)))
+        .collect();
+    let area = chart.plotting_area();
+    let (px, py) = area.get_pixel_range();
+    let to_px = |x: f64, y: f64| {
+        let (a, b) = area.map_coordinate(&(x, y));
+        (f64::from(a), f64::from(b))
+    };
+    let _ = (px, py);
+    let fits = h.cells.iter().enumerate().all(|(i, _)| {
+        let ((xl, xh), (yl, yh)) = (span(xs[i], &xe), span(ys[i], &ye));
+        let (a, b) = (to_px(xl, yl), to_px(xh, yh));
+        let (w, hgt) = ((b.0 - a.0).abs(), (b.1 - a.1).abs());
+        labels[i]
+            .as_ref()
+            .is_none_or(|t| text::width(t, sz.base) <= 0.9 * w && 1.3 * sz.base <= hgt)
+    });
     for (i, c) in h.cells.iter().enumerate() {
         let ((xl, xh), (yl, yh)) = (span(xs[i], &xe), span(ys[i], &ye));
-        let (fill, text) = match c.2 {
-            Some(v) if v.is_finite() => {
-                let t = (tr(v.max(1e-300), h.log_value) - lo) / (hi - lo);
-                (ramp(t), format!("{v:.0e}"))
-            }
-            _ => (RGBColor(200, 200, 200), "fail".to_string()),
+        let fill = match c.2 {
+            Some(v) if v.is_finite() => ramp(scale_pos(h, v)),
+            _ => RGBColor(200, 200, 200),
         };
         chart
             .draw_series(std::iter::once(Rectangle::new(
@@ -472,54 +1402,147 @@ fn draw_heat<DB: DrawingBackend>(
                 fill.filled(),
             )))
             .map_err(err)?;
-        let dark = matches!(c.2, Some(v) if v.is_finite() && (tr(v.max(1e-300), h.log_value) - lo) / (hi - lo) < 0.6);
-        let tc = if dark { WHITE } else { BLACK };
-        chart
-            .draw_series(std::iter::once(Text::new(
-                text,
-                (xl + 0.2 * (xh - xl), 0.5 * (yl + yh)),
-                ("sans-serif", 11).into_font().color(&tc),
-            )))
-            .map_err(err)?;
+        match (&labels[i], c.2) {
+            (Some(t), Some(v)) if fits => {
+                let tc = if scale_pos(h, v) < 0.6 { WHITE } else { BLACK };
+                chart
+                    .draw_series(std::iter::once(Text::new(
+                        t.clone(),
+                        (0.5 * (xl + xh), 0.5 * (yl + yh)),
+                        text_style(sz.base, tc, HPos::Center, VPos::Center),
+                    )))
+                    .map_err(err)?;
+            }
+            (None, _) => {
+                // Failed (or undefined) cell: crossed out.
+                let (fx, fy) = (0.25 * (xh - xl), 0.25 * (yh - yl));
+                let st = RGBColor(90, 90, 90).stroke_width(sz.stroke(2));
+                chart
+                    .draw_series([
+                        PathElement::new(vec![(xl + fx, yl + fy), (xh - fx, yh - fy)], st),
+                        PathElement::new(vec![(xl + fx, yh - fy), (xh - fx, yl + fy)], st),
+                    ])
+                    .map_err(err)?;
+            }
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
+/// The colour bar of a heat map right of the plot (right edge `px_end`, vertical range `py`),
+/// its label against the panel's right edge `right`.
+fn draw_bar<DB: DrawingBackend>(
+    root: &Root<DB>,
+    h: &Heat,
+    ticks: &[Tick],
+    (px_end, py): (i32, std::ops::Range<i32>),
+    right: f64,
+    sz: &Sz,
+) -> std::result::Result<(), DErr> {
+    let x0 = f64::from(px_end) + sz.gap;
+    let x1 = x0 + 0.7 * sz.base;
+    let (top, bottom) = (f64::from(py.start), f64::from(py.end));
+    let n = 96;
+    for i in 0..n {
+        let (a, b) = (i as f64 / n as f64, (i + 1) as f64 / n as f64);
+        let (ya, yb) = (bottom - a * (bottom - top), bottom - b * (bottom - top));
+        root.draw(&Rectangle::new(
+            [
+                (x0.round() as i32, yb.floor() as i32),
+                (x1.round() as i32, ya.ceil() as i32),
+            ],
+            ramp(0.5 * (a + b)).filled(),
+        ))
+        .map_err(err)?;
+    }
+    root.draw(&Rectangle::new(
+        [
+            (x0.round() as i32, top.round() as i32),
+            (x1.round() as i32, bottom.round() as i32),
+        ],
+        BLACK.stroke_width(sz.stroke(1)),
+    ))
+    .map_err(err)?;
+    let (lo, hi) = (
+        tr(h.value_range.0, h.log_value),
+        tr(h.value_range.1, h.log_value),
+    );
+    let ls = text_style(sz.base, BLACK, HPos::Left, VPos::Center);
+    let tick = f64::from(sz.tick());
+    for (v, t) in ticks {
+        let y = bottom - (v - lo) / (hi - lo) * (bottom - top);
+        root.draw(&PathElement::new(
+            vec![
+                (x1.round() as i32, y.round() as i32),
+                ((x1 + tick).round() as i32, y.round() as i32),
+            ],
+            BLACK.stroke_width(sz.stroke(1)),
+        ))
+        .map_err(err)?;
+        put(root, t, &ls, x1 + tick + 0.3 * sz.gap, y)?;
+    }
+    if !h.value_label.is_empty() {
+        let st = text_style(sz.label, BLACK, HPos::Center, VPos::Bottom)
+            .transform(FontTransform::Rotate270);
+        put(
+            root,
+            &h.value_label,
+            &st,
+            right - 0.3 * sz.gap,
+            0.5 * (top + bottom),
+        )?;
     }
     Ok(())
 }
 
 fn draw_all<DB: DrawingBackend>(
-    root: &DrawingArea<DB, Shift>,
-    rows: usize,
-    cols: usize,
+    root: &Root<DB>,
     panels: &[PanelKind],
-    caption: &str,
+    lay: &Layout,
 ) -> std::result::Result<(), DErr> {
     root.fill(&WHITE).map_err(err)?;
-    let body = if caption.is_empty() {
-        root.clone()
-    } else {
-        let (_, h) = root.dim_in_pixel();
-        let (top, bottom) = root.split_vertically(h as i32 - 34);
-        bottom
-            .draw_text(
-                caption,
-                &("sans-serif", 13).into_font().color(&RGBColor(60, 60, 60)),
-                (10, 10),
-            )
-            .map_err(err)?;
-        top
-    };
-    let areas = body.split_evenly((rows, cols));
-    for (a, p) in areas.iter().zip(panels) {
-        match p {
-            PanelKind::Xy(p) => draw_xy(a, p)?,
-            PanelKind::Heat(h) => draw_heat(a, h)?,
+    let sz = &lay.sz;
+    let mut y = 0.0;
+    for (r, rh) in lay.rows_h.iter().enumerate() {
+        for c in 0..lay.cols {
+            let i = r * lay.cols + c;
+            if let (Some(k), Some(l)) = (panels.get(i), lay.panels.get(i)) {
+                draw_panel(root, k, l, (c as f64 * lay.pw, y), lay.pw, sz)?;
+            }
         }
+        y += rh;
+    }
+    if !lay.shared.is_empty() {
+        draw_legend(
+            root,
+            &lay.shared,
+            &lay.shared_rows,
+            sz.gap,
+            sz.w - 2.0 * sz.gap,
+            y,
+            sz,
+        )?;
+        y += legend_h(lay.shared_rows.len(), sz);
+    }
+    let cs = text_style(sz.base, RGBColor(60, 60, 60), HPos::Left, VPos::Top);
+    for (i, line) in lay.caption.iter().enumerate() {
+        put(
+            root,
+            line,
+            &cs,
+            sz.gap,
+            y + 0.5 * sz.gap + i as f64 * line_h(sz.base),
+        )?;
     }
     root.present().map_err(err)?;
     Ok(())
 }
 
-/// Draws `panels` on a `rows × cols` grid with an optional caption line at the bottom and
-/// writes `<dir>/<stem>.png` and `<dir>/<stem>.svg`.
+/// Draws `panels` on a `rows × cols` grid (row-major) with an optional caption at the bottom
+/// and writes `<dir>/<stem>.png` and `<dir>/<stem>.svg`. `size.0` is the width in pixels;
+/// `size.1` only sets the aspect ratio of the plots (see the module documentation), the
+/// height follows from the layout.
 pub fn figure(
     dir: &Path,
     stem: &str,
@@ -532,22 +1555,86 @@ pub fn figure(
     std::fs::create_dir_all(dir)
         .map_err(|e| StudyError::Other(format!("{}: {e}", dir.display())))?;
     let fail = |what: &str, e: String| StudyError::Other(format!("figure {stem}.{what}: {e}"));
+    let lay = layout(size, rows, cols, panels, caption);
+    let px = (size.0.max(100), lay.height);
     // PNG: draw into a temporary file (the extension picks the encoder), then rename.
     let png = dir.join(format!("{stem}.png"));
     let tmp = dir.join(format!(".{stem}.tmp-{}.png", std::process::id()));
     {
-        let root = BitMapBackend::new(&tmp, size).into_drawing_area();
-        if let Err(e) = draw_all(&root, rows, cols, panels, caption) {
+        let root = OutlineText::bitmap(BitMapBackend::new(&tmp, px)).into_drawing_area();
+        if let Err(e) = draw_all(&root, panels, &lay) {
+            drop(root);
             let _ = std::fs::remove_file(&tmp);
             return Err(fail("png", e));
         }
     }
     std::fs::rename(&tmp, &png).map_err(|e| fail("png", e.to_string()))?;
     let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
-        draw_all(&root, rows, cols, panels, caption).map_err(|e| fail("svg", e))?;
-    }
+    let texts = {
+        let (backend, texts) = OutlineText::svg(SVGBackend::with_string(&mut svg, px));
+        let root = backend.into_drawing_area();
+        draw_all(&root, panels, &lay).map_err(|e| fail("svg", e))?;
+        texts
+    };
+    let svg = text::finish_svg(&svg, texts);
     write_atomic(&dir.join(format!("{stem}.svg")), svg.as_bytes())?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn log_ticks_are_decades_with_readable_labels() {
+        let (t, light) = log_ticks(-2.3, 1.2, 8);
+        let labels: Vec<&str> = t.iter().map(|x| x.1.as_str()).collect();
+        assert_eq!(labels, ["0.01", "0.1", "1", "10"]);
+        assert!(light.contains(&2f64.log10()));
+        let (t, _) = log_ticks(-8.5, -0.5, 8);
+        assert_eq!(t.first().map(|x| x.1.as_str()), Some("10⁻⁸"));
+        assert_eq!(t.last().map(|x| x.1.as_str()), Some("10⁻¹"));
+        // Few labels fit: every other decade.
+        let (t, _) = log_ticks(-8.5, -0.5, 4);
+        assert!(t.len() <= 4 && t.iter().all(|x| x.0 as i32 % 2 == 0));
+    }
+
+    #[test]
+    fn short_log_ranges_use_1_2_5() {
+        let (t, _) = log_ticks(0.1f64.log10(), 0.9f64.log10(), 6);
+        let labels: Vec<&str> = t.iter().map(|x| x.1.as_str()).collect();
+        assert_eq!(labels, ["0.1", "0.2", "0.5"]);
+    }
+
+    #[test]
+    fn linear_ticks_are_round() {
+        let l: Vec<String> = linear_ticks(-0.13, 1.07, 5)
+            .into_iter()
+            .map(|x| x.1)
+            .collect();
+        assert_eq!(l, ["0", "0.25", "0.50", "0.75", "1.00"]);
+        let l: Vec<String> = linear_ticks(0.0, 1.6e8, 4)
+            .into_iter()
+            .map(|x| x.1)
+            .collect();
+        assert_eq!(l, ["0", "0.5×10⁸", "1.0×10⁸", "1.5×10⁸"]);
+        let l: Vec<String> = linear_ticks(-3.0, 17.0, 4)
+            .into_iter()
+            .map(|x| x.1)
+            .collect();
+        assert_eq!(l, ["0", "5", "10", "15"]);
+        let l: Vec<String> = linear_ticks(-0.25, 0.25, 2)
+            .into_iter()
+            .map(|x| x.1)
+            .collect();
+        assert_eq!(l, ["−0.25", "0", "0.25"]);
+    }
+
+    #[test]
+    fn values_read_plainly_or_with_powers_of_ten() {
+        assert_eq!(value_text(5e-4, false), "5×10⁻⁴");
+        assert_eq!(value_text(1e-3, false), "10⁻³");
+        assert_eq!(value_text(2.5e-3, true), "0.0025");
+        assert_eq!(value_text(0.01, true), "0.01");
+    }
 }
