@@ -158,15 +158,14 @@ fn contacts_override(scene: &Scene, contacts: &[Contact]) -> String {
     format!("[{}]", items.join(", "))
 }
 
+/// The case of variant `v` on record `rec` at (gap (m), c_r, analysis).
 fn case(
     ctx: &Ctx,
     d: &Def,
     scene: &Scene,
     v: &Variant,
     rec: &str,
-    gap: f64,
-    cr: f64,
-    run: Run,
+    (gap, cr, run): (f64, f64, Run),
 ) -> CaseSpec {
     let method = match run {
         Run::Rigid | Run::Fewer => Method::Momentum,
@@ -275,7 +274,7 @@ impl Study for ModelForm {
                 for &gap in &d.gaps {
                     for &cr in &g.crs {
                         for &run in runs(cr) {
-                            out.push(case(ctx, &d, &scene, v, rec, gap, cr, run));
+                            out.push(case(ctx, &d, &scene, v, rec, (gap, cr, run)));
                         }
                     }
                 }
@@ -292,7 +291,7 @@ impl Study for ModelForm {
         let head_label = record_label(head);
         let n_rec = g.records.len();
         let c = |v: &Variant, rec: &str, gap: f64, cr: f64, run: Run| {
-            case(ctx, &d, &scene, v, rec, gap, cr, run)
+            case(ctx, &d, &scene, v, rec, (gap, cr, run))
         };
         let amps = |spec: &CaseSpec| amplification(res, spec);
         // Top-story and max-over-stories amplification of building b.
@@ -316,13 +315,23 @@ impl Study for ModelForm {
                 "ζ1", "ζ2", "ζ3", "ζ4", "description",
             ],
         );
+        // Per variant and building: (k_top / k_ground, f2 / f1).
+        let mut sticks: Vec<Vec<(f64, f64)>> = Vec::new();
         for v in &d.variants {
             let spec = c(v, head, d.gaps[0], 1.0, Run::Rigid);
+            let mut mine = Vec::new();
             match spec.load_scene(&ctx.studies_dir) {
                 Ok(s) => {
                     for b in s.buildings.iter().take(2) {
                         let m = b.modes().ok();
                         let fr = m.as_ref().map(|m| m.frequencies_hz()).unwrap_or_default();
+                        mine.push((
+                            structure::model::top_to_ground(b),
+                            match fr.as_slice() {
+                                [f1, f2, ..] => f2 / f1,
+                                _ => f64::NAN,
+                            },
+                        ));
                         let z = m.as_ref().map(|m| m.zeta.clone()).unwrap_or_default();
                         let mut row = vec![
                             v.name.clone(),
@@ -341,6 +350,7 @@ impl Study for ModelForm {
                     format!("scene refused: {e}"),
                 ]),
             }
+            sticks.push(mine);
         }
 
         // --- Amplification table.
@@ -488,12 +498,26 @@ impl Study for ModelForm {
         let gap0 = d.gaps[0];
         let calib = &d.variants[0];
         let t = |v: &Variant, b: usize| top(&c(v, head, gap0, 1.0, Run::Rigid), b);
+        let tm = |v: &Variant, b: usize| {
+            med(g
+                .records
+                .iter()
+                .map(|rec| top(&c(v, rec, gap0, 1.0, Run::Rigid), b))
+                .collect())
+        };
         let mut parts = Vec::new();
         for v in &d.variants {
-            parts.push(format!("{} {} / {}", v.name, f(t(v, 0), 2), f(t(v, 1), 2)));
+            parts.push(format!(
+                "{} {} / {} (median {} / {})",
+                v.name,
+                f(t(v, 0), 2),
+                f(t(v, 1), 2),
+                f(tm(v, 0), 2),
+                f(tm(v, 1), 2)
+            ));
         }
         reading.push(format!(
-            "Top-story amplification of buildings 1 / 2 with the momentum method (all modes), record {head_label}, gap {gap0} m, c_r = 1: {}.",
+            "Top-story amplification of buildings 1 / 2 with the momentum method (all modes), record {head_label} (median over {n_rec} record(s)), gap {gap0} m, c_r = 1: {}.",
             parts.join("; ")
         ));
         if let (Some(a), Some(b)) = (t(calib, 0), t(calib, 1)) {
@@ -516,10 +540,53 @@ impl Study for ModelForm {
                 rel.join("; ")
             ));
         }
-        reading.push(
-            "The sticks' stiffness profile is the assumption the answer depends on most: the two-frequency calibration makes the stories stiffen toward the roof (k_top / k_ground > 1 in the first table) because the assumed f2/f1 exceeds the uniform stick's ≈ 2.98."
-                .into(),
-        );
+        // The variant that moves the headline most (mean of |relative change| over the two
+        // buildings).
+        if let (Some(a), Some(b)) = (t(calib, 0), t(calib, 1)) {
+            let change = |v: &Variant| match (t(v, 0), t(v, 1)) {
+                (Some(x), Some(y)) => Some(0.5 * ((x / a - 1.0).abs() + (y / b - 1.0).abs())),
+                _ => None,
+            };
+            let mut ranked: Vec<(&Variant, f64)> = d
+                .variants
+                .iter()
+                .skip(1)
+                .filter_map(|v| change(v).map(|x| (v, x)))
+                .collect();
+            ranked.sort_by(|p, q| q.1.total_cmp(&p.1));
+            if !ranked.is_empty() {
+                reading.push(format!(
+                    "Ranked by the mean |relative change| of the two top-story amplifications: {}.",
+                    ranked
+                        .iter()
+                        .map(|(v, x)| format!("{} {:.0} %", v.name, 100.0 * x))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ));
+            }
+        }
+        // Why the calibrated sticks look as they do, from the models themselves.
+        if let (Some(cal), Some(n)) = (
+            sticks.first(),
+            scene.buildings.first().map(|b| b.n_floors()),
+        ) {
+            let x = std::f64::consts::PI / (2.0 * (2 * n + 1) as f64);
+            let uniform_ratio = (3.0 * x).sin() / x.sin();
+            let desc: Vec<String> = cal
+                .iter()
+                .zip(&scene.buildings)
+                .map(|((k, r), b)| {
+                    format!("{} k_top / k_ground = {k:.2} (f2 / f1 = {r:.2})", b.name)
+                })
+                .collect();
+            let stiffer = cal.iter().filter(|(k, _)| *k > 1.0).count();
+            reading.push(format!(
+                "The `{}` sticks: {}; a uniform {n}-floor stick has f2 / f1 = {uniform_ratio:.3}, so a target ratio above it needs stories that stiffen toward the roof ({stiffer} of {} buildings here).",
+                calib.name,
+                desc.join(", "),
+                cal.len()
+            ));
+        }
         reading.push(format!(
             "The gap element at k = {:.0e} N/m is the check on every momentum run (columns `gap el.`); s_req is the separation needed to avoid contact, so gap / s_req < 1 means the buildings touch.",
             d.check_stiffness
