@@ -14,7 +14,9 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 
 use crate::ground::{GroundMotion, RecordError, RecordFormat, Units};
-use crate::model::{calibrate_two_frequencies, Building, Damping, ModelError};
+use crate::model::{
+    calibrate_first_frequency, calibrate_two_frequencies, Building, Damping, ModelError,
+};
 
 /// Errors from reading, overriding or validating a scene.
 #[derive(Debug, thiserror::Error)]
@@ -368,8 +370,12 @@ struct RawBuilding {
     mass: Option<f64>,
     story_stiffness: Option<ScalarOrList>,
     target_frequencies_hz: Option<Vec<f64>>,
+    /// k_top / k_ground of the linear taper fitted to one target frequency.
+    top_stiffness_ratio: Option<f64>,
     reference_frequencies_hz: Option<Vec<f64>>,
     damping_ratio: Option<ScalarOrList>,
+    /// Two mode numbers (from 1) anchoring Rayleigh damping.
+    rayleigh_modes: Option<Vec<i64>>,
     initial_displacement: Option<Vec<f64>>,
     initial_velocity: Option<Vec<f64>>,
     story_height: Option<ScalarOrList>,
@@ -719,13 +725,53 @@ fn validate(raw: RawScene, origin: &str, base_dir: &Path) -> Result<Scene, Scene
                     "give `story_stiffness` or `target_frequencies_hz`, not both".into(),
                 ))
             }
+            (Some(_), None) if rb.top_stiffness_ratio.is_some() => {
+                return Err(invalid(
+                    key("top_stiffness_ratio"),
+                    "applies to a calibration: give it with one `target_frequencies_hz` value, not with `story_stiffness`".into(),
+                ))
+            }
             (Some(ScalarOrList::Scalar(k)), None) => (vec![k; n], None),
             (Some(ScalarOrList::List(k)), None) => (k, None),
+            (None, Some(f)) if f.len() == 2 && rb.top_stiffness_ratio.is_some() => {
+                return Err(invalid(
+                    key("top_stiffness_ratio"),
+                    "two target frequencies fix the taper: give one target frequency (f1) with `top_stiffness_ratio`, or two without it".into(),
+                ))
+            }
+            (None, Some(f)) if f.len() == 1 && rb.top_stiffness_ratio.is_some() => {
+                let r = rb.top_stiffness_ratio.unwrap_or(1.0);
+                if masses.iter().any(|m| *m != masses[0]) {
+                    return Err(invalid(
+                        key("target_frequencies_hz"),
+                        "calibration needs a uniform floor mass".into(),
+                    ));
+                }
+                if !(r.is_finite() && r > 0.0) {
+                    return Err(invalid(
+                        key("top_stiffness_ratio"),
+                        format!("{r}: expected a finite ratio > 0 (top story stiffness / ground story stiffness)"),
+                    ));
+                }
+                let c = calibrate_first_frequency(
+                    &rb.name,
+                    n,
+                    masses[0],
+                    f[0],
+                    r,
+                    zeta_list.ratio(0),
+                )
+                .map_err(|e| invalid(key("target_frequencies_hz"), e.to_string()))?;
+                (c.building.story_stiffness.clone(), Some(c))
+            }
             (None, Some(f)) => {
                 if f.len() != 2 {
                     return Err(invalid(
                         key("target_frequencies_hz"),
-                        format!("expected 2 values (f1, f2 in Hz), found {}", f.len()),
+                        format!(
+                            "expected 2 values (f1, f2 in Hz), found {}; or one value (f1) with `top_stiffness_ratio`",
+                            f.len()
+                        ),
                     ));
                 }
                 if masses.iter().any(|m| *m != masses[0]) {
@@ -772,7 +818,7 @@ fn validate(raw: RawScene, origin: &str, base_dir: &Path) -> Result<Scene, Scene
                 format!("{k}: expected a finite stiffness > 0 (N/m)"),
             ));
         }
-        let b = Building {
+        let mut b = Building {
             name: rb.name.clone(),
             masses,
             story_stiffness: stiffness,
@@ -785,6 +831,29 @@ fn validate(raw: RawScene, origin: &str, base_dir: &Path) -> Result<Scene, Scene
             ModelError::Invalid { what, .. } => invalid(format!("buildings[{bi}]"), what),
             other => model_err(other),
         })?;
+        if let Some(modes) = &rb.rayleigh_modes {
+            let zeta = match &b.damping {
+                Damping::Uniform(z) => *z,
+                Damping::PerMode(_) => {
+                    return Err(invalid(
+                        key("rayleigh_modes"),
+                        "Rayleigh damping takes one `damping_ratio` (the ratio at both anchor modes), not a list".into(),
+                    ))
+                }
+            };
+            let ok = |m: i64| (1..=n as i64).contains(&m);
+            if modes.len() != 2 || !modes.iter().all(|m| ok(*m)) || modes[0] == modes[1] {
+                return Err(invalid(
+                    key("rayleigh_modes"),
+                    format!("{modes:?}: expected two different mode numbers in 1 ..= {n}"),
+                ));
+            }
+            b.set_rayleigh_damping(zeta, (modes[0] - 1) as usize, (modes[1] - 1) as usize)
+                .map_err(|e| match e {
+                    ModelError::Invalid { what, .. } => invalid(key("rayleigh_modes"), what),
+                    other => model_err(other),
+                })?;
+        }
         buildings.push(b);
     }
 

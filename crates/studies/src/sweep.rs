@@ -185,12 +185,14 @@ impl CaseSpec {
             .find_map(|s| s.strip_prefix(prefix.as_str()))
     }
 
-    /// The same analysis without impact: every contact pushed 1 km away, contact-law
-    /// options dropped (they cannot matter), integrator options kept.
+    /// The same analysis without impact: contact overrides dropped (a whole `contacts=[…]`
+    /// list too, so the scene's own contacts come back) and contact 0 pushed 1 km away,
+    /// contact-law options dropped (they cannot matter), integrator options kept.
     pub fn baseline(&self) -> CaseSpec {
         let mut b = self.clone();
         b.set.retain(|s| {
             !(s.starts_with("contacts.")
+                || s.starts_with("contacts=")
                 || s.starts_with("gap_element.stiffness=")
                 || s.starts_with("gap_element.law=")
                 || s.starts_with("gap_element.tension=")

@@ -24,6 +24,38 @@ impl Damping {
     }
 }
 
+/// Rayleigh damping C = a M + b K. Being classical, it is modal damping with the ratios
+/// ζ_n = a / (2 ω_n) + b ω_n / 2; through two anchor frequencies ω_i ≠ ω_j with the same
+/// ratio ζ at both: a = 2 ζ ω_i ω_j / (ω_i + ω_j) (1/s), b = 2 ζ / (ω_i + ω_j) (s).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Rayleigh {
+    /// Mass-proportional coefficient a, 1/s.
+    pub a: f64,
+    /// Stiffness-proportional coefficient b, s.
+    pub b: f64,
+}
+
+impl Rayleigh {
+    /// The coefficients giving ratio `zeta` at circular frequencies `w_i` and `w_j` (rad/s,
+    /// finite, > 0 and different); `None` otherwise.
+    pub fn through(zeta: f64, w_i: f64, w_j: f64) -> Option<Rayleigh> {
+        let ok = |w: f64| w.is_finite() && w > 0.0;
+        if !(ok(w_i) && ok(w_j) && w_i != w_j && zeta.is_finite()) {
+            return None;
+        }
+        let s = w_i + w_j;
+        Some(Rayleigh {
+            a: 2.0 * zeta * w_i * w_j / s,
+            b: 2.0 * zeta / s,
+        })
+    }
+
+    /// Damping ratio at circular frequency `w` (rad/s): a / (2ω) + b ω / 2.
+    pub fn ratio(&self, w: f64) -> f64 {
+        self.a / (2.0 * w) + self.b * w / 2.0
+    }
+}
+
 /// A planar lumped-mass shear stick.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Building {
@@ -136,6 +168,41 @@ impl Building {
             )));
         }
         Ok(())
+    }
+
+    /// Replaces the damping by Rayleigh damping with ratio `zeta` at modes `i` and `j`
+    /// (0-based, different, within the building's modes): each mode n then gets
+    /// ζ_n = a / (2 ω_n) + b ω_n / 2 as a per-mode ratio. Returns the coefficients.
+    pub fn set_rayleigh_damping(
+        &mut self,
+        zeta: f64,
+        i: usize,
+        j: usize,
+    ) -> Result<Rayleigh, ModelError> {
+        let n = self.n_floors();
+        let bad = |what: String| ModelError::Invalid {
+            building: self.name.clone(),
+            what,
+        };
+        if i >= n || j >= n || i == j {
+            return Err(bad(format!(
+                "Rayleigh damping needs two different modes among 1 … {n}, got {} and {}",
+                i + 1,
+                j + 1
+            )));
+        }
+        let omega = self.modes()?.omega;
+        let r = Rayleigh::through(zeta, omega[i], omega[j]).ok_or_else(|| {
+            bad(format!(
+                "Rayleigh damping through modes {} and {}: equal frequencies ({} rad/s)",
+                i + 1,
+                j + 1,
+                omega[i]
+            ))
+        })?;
+        self.damping = Damping::PerMode(omega.iter().map(|w| r.ratio(*w)).collect());
+        self.validate()?;
+        Ok(r)
     }
 
     /// Lumped mass matrix M = diag(m), kg.

@@ -1,4 +1,4 @@
-//! Calibration of a shear stick to two target frequencies.
+//! Calibration of a shear stick to two target frequencies, or to one with a given taper.
 //!
 //! Uniform floor mass `m` and a linearly tapered story-stiffness profile with two parameters,
 //!
@@ -12,6 +12,11 @@
 //! lowers the ratio, a softer base (β < 0) raises it. Ratios above ≈ 3 (both paper buildings:
 //! 3.33 and 3.78) therefore need stories that stiffen with height: the planar shear stick
 //! stands in for a flexural-shear building, whose higher modes are further apart.
+//!
+//! [`calibrate_first_frequency`] fixes the taper instead, through the ratio of the top to the
+//! ground story stiffness r = k_n / k_1 = 1 − β (n − 1)/n, i.e. β = (1 − r) n / (n − 1)
+//! (r = 1: uniform stick; r < 1: softer top), and fits K to the first frequency alone by the
+//! same exact scaling ω ∝ √K.
 
 use super::{Building, ModelError};
 
@@ -23,6 +28,21 @@ pub struct Calibration {
     pub k_base: f64,
     /// Taper β (dimensionless): the top story has stiffness K (1 − β (n−1)/n).
     pub taper: f64,
+}
+
+impl Calibration {
+    /// Ratio of the top to the ground story stiffness, k_n / k_1 (dimensionless).
+    pub fn top_to_ground_ratio(&self) -> f64 {
+        top_to_ground(&self.building)
+    }
+}
+
+/// k_n / k_1 of a building (1 for a single story).
+pub fn top_to_ground(b: &Building) -> f64 {
+    match (b.story_stiffness.first(), b.story_stiffness.last()) {
+        (Some(k1), Some(kn)) => kn / k1,
+        _ => f64::NAN,
+    }
 }
 
 fn profile(n: usize, k: f64, beta: f64) -> Vec<f64> {
@@ -87,6 +107,57 @@ pub fn calibrate_two_frequencies(
         .map_err(|e| fail(format!("root search for the taper failed: {e:?}")))?;
     let b0 = Building::new(name, vec![mass; n], profile(n, k0, beta), zeta);
     let (w1, _) = first_two(&b0)?;
+    let k = k0 * (2.0 * std::f64::consts::PI * f1_hz / w1).powi(2);
+    let building = Building::new(name, vec![mass; n], profile(n, k, beta), zeta);
+    Ok(Calibration {
+        building,
+        k_base: k,
+        taper: beta,
+    })
+}
+
+/// Builds an `n`-floor stick of uniform floor mass `mass` (kg) with a linear stiffness taper
+/// whose top story is `top_ratio` (dimensionless, > 0) times its ground story, scaled so that
+/// its first frequency is `f1_hz` (Hz); damping ratio `zeta` in every mode. `top_ratio = 1`
+/// gives the uniform stick.
+pub fn calibrate_first_frequency(
+    name: &str,
+    n: usize,
+    mass: f64,
+    f1_hz: f64,
+    top_ratio: f64,
+    zeta: f64,
+) -> Result<Calibration, ModelError> {
+    let fail = |reason: String| ModelError::Calibration {
+        building: name.to_string(),
+        reason,
+    };
+    if n == 0 {
+        return Err(fail("a building needs at least one floor".into()));
+    }
+    if !(f1_hz.is_finite() && f1_hz > 0.0) {
+        return Err(fail(format!(
+            "the target frequency must be finite and > 0, got {f1_hz} Hz"
+        )));
+    }
+    if !(top_ratio.is_finite() && top_ratio > 0.0) {
+        return Err(fail(format!(
+            "the top-to-ground story stiffness ratio must be finite and > 0, got {top_ratio}"
+        )));
+    }
+    if n == 1 && top_ratio != 1.0 {
+        return Err(fail(format!(
+            "a one-story building has no taper: its top-to-ground ratio is 1, got {top_ratio}"
+        )));
+    }
+    let beta = if n == 1 {
+        0.0
+    } else {
+        (1.0 - top_ratio) * n as f64 / (n as f64 - 1.0)
+    };
+    let k0 = 1.0e9;
+    let b0 = Building::new(name, vec![mass; n], profile(n, k0, beta), zeta);
+    let w1 = b0.modes()?.omega[0];
     let k = k0 * (2.0 * std::f64::consts::PI * f1_hz / w1).powi(2);
     let building = Building::new(name, vec![mass; n], profile(n, k, beta), zeta);
     Ok(Calibration {

@@ -8,6 +8,7 @@
 //! M = diag(m_1 … m_n)
 //! K_jj = k_j + k_{j+1} (k_{n+1} = 0),  K_{j,j+1} = K_{j+1,j} = −k_{j+1}
 //! C = M Φ diag(2 ζ_n ω_n) Φᵀ M          (classical modal damping, paper eq. 27)
+//! C = a M + b K  ⇔  ζ_n = a/(2 ω_n) + b ω_n/2   (Rayleigh damping, a special case: [`Rayleigh`])
 //! story shear V_j = k_j (u_j − u_{j−1}),  u_0 = 0
 //! ```
 
@@ -16,8 +17,10 @@ pub mod calibrate;
 pub mod modes;
 pub mod story_law;
 
-pub use building::{Building, Damping};
-pub use calibrate::{calibrate_two_frequencies, Calibration};
+pub use building::{Building, Damping, Rayleigh};
+pub use calibrate::{
+    calibrate_first_frequency, calibrate_two_frequencies, top_to_ground, Calibration,
+};
 pub use modes::Modes;
 pub use story_law::{Bilinear, BilinearParams, BilinearState};
 

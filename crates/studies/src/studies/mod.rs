@@ -11,6 +11,7 @@
 
 pub mod cost;
 pub mod gap;
+pub mod modelform;
 pub mod modes;
 pub mod paper;
 pub mod restitution;
@@ -35,7 +36,7 @@ use crate::table::Table;
 pub const EXTRA: [&str; 1] = ["robustness"];
 
 /// All studies, in the order `--all` runs them.
-pub const NAMES: [&str; 7] = [
+pub const NAMES: [&str; 8] = [
     "paper",
     "stiffness",
     "modes",
@@ -43,6 +44,7 @@ pub const NAMES: [&str; 7] = [
     "gap",
     "cost",
     "stability",
+    "modelform",
 ];
 
 /// Options that change the case list (kept in the manifest so a merge rebuilds the same).
@@ -129,6 +131,7 @@ pub fn study(name: &str) -> Option<&'static dyn Study> {
         "gap" => &gap::Gap,
         "cost" => &cost::Cost,
         "stability" => &stability::Stability,
+        "modelform" => &modelform::ModelForm,
         "robustness" => &robustness::Robustness,
         _ => return None,
     })
