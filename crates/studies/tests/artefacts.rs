@@ -254,7 +254,11 @@ fn quick_run_artefacts_are_legible_linked_and_tidy() {
     );
     let upem = font_units_per_em();
     let svgs = find(&dest, &|n| n.ends_with(".svg"));
-    assert!(svgs.len() >= 7, "one figure per study at least: {svgs:?}");
+    let n_studies = studies::studies::NAMES.len();
+    assert!(
+        svgs.len() >= n_studies,
+        "one figure per study at least: {svgs:?}"
+    );
     for s in &svgs {
         let ratio = check_svg(s, upem);
         assert!(
@@ -266,9 +270,9 @@ fn quick_run_artefacts_are_legible_linked_and_tidy() {
         // Every SVG has its PNG.
         assert!(s.with_extension("png").is_file(), "{}", s.display());
     }
-    assert!(check_links(&dest) >= 7);
+    assert!(check_links(&dest) >= n_studies);
     let cases = find(&dest, &|n| n == "cases.csv");
-    assert_eq!(cases.len(), 7, "{cases:?}");
+    assert_eq!(cases.len(), n_studies, "{cases:?}");
     for c in &cases {
         check_cases_csv(c);
     }
