@@ -270,6 +270,16 @@ impl Study for ModelForm {
         let g = grid(ctx, &d);
         let mut out = Vec::new();
         for v in &d.variants {
+            // A variant whose overrides the scene refuses is a bad definition, said before
+            // anything runs.
+            if let Some(rec) = g.records.first() {
+                case(ctx, &d, &scene, v, rec, (d.gaps[0], g.crs[0], Run::Rigid))
+                    .load_scene(&ctx.studies_dir)
+                    .map_err(|message| StudyError::Definition {
+                        file: ctx.def_file.clone(),
+                        message: format!("variant `{}`: {message}", v.name),
+                    })?;
+            }
             for rec in &g.records {
                 for &gap in &d.gaps {
                     for &cr in &g.crs {
