@@ -162,3 +162,36 @@ fn quick_modelform_study_runs_and_its_tables_follow_the_cases() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("modelform"), "{err}");
 }
+
+#[test]
+fn a_variant_the_scene_refuses_is_a_bad_definition() {
+    let d = TempDir::new("modelform-bad");
+    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../../studies");
+    let def = std::fs::read_to_string(format!("{root}/modelform.toml"))
+        .unwrap()
+        .replace(
+            "\"paper/scene.toml\"",
+            &format!("\"{root}/paper/scene.toml\""),
+        )
+        .replace("\"../data/", &format!("\"{root}/../data/"))
+        .replace("top_stiffness_ratio=0.45\"", "top_stiffnes_ratio=0.45\"");
+    d.write("modelform.toml", &def);
+    let out = d.path("results");
+    let o = pound(&[
+        "studies",
+        "run",
+        "modelform",
+        "--quick",
+        "--studies-dir",
+        d.path("").to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("variant `taper 0.45`") && err.contains("top_stiffnes_ratio"),
+        "{err}"
+    );
+    assert!(!out.join("modelform").join("cases").exists());
+}
