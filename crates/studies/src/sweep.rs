@@ -367,10 +367,18 @@ fn failed(spec: &CaseSpec, kind: &str, msg: String, wall: f64) -> CaseResult {
 
 /// Runs one case (never panics: a panic inside the solver becomes a failed case).
 pub fn run_case(spec: &CaseSpec, studies_dir: &Path) -> CaseResult {
-    let scene = match spec.load_scene(studies_dir) {
+    let mut scene = match spec.load_scene(studies_dir) {
         Ok(s) => s,
         Err(e) => return failed(spec, "Scene", e, 0.0),
     };
+    if spec.params.contains_key("baseline") {
+        // The same model without contact: every contact (not only entry 0 of the file, which
+        // the override moved) 1 km apart, so a scene with several contact entries has no
+        // active contact either; the contact floors stay known for the separation outputs.
+        for c in &mut scene.contacts {
+            c.gap = 1000.0;
+        }
+    }
     let mut best = f64::INFINITY;
     let mut walls = Vec::with_capacity(spec.repeat.max(1) as usize);
     let mut last = None;

@@ -250,3 +250,47 @@ fn data_tables_are_tidy() {
     let failed = std::fs::read_to_string(bad_dir.join("peaks.csv")).unwrap();
     assert_eq!(failed.lines().count(), 1, "failed cases have no peak rows");
 }
+
+/// A baseline is the model without any contact, even when the scene file has several
+/// contact entries (the case's override only names entry 0).
+#[test]
+fn baseline_has_no_active_contact_with_several_contact_entries() {
+    let dir = tmp("baseline-two-contacts");
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("two.toml");
+    std::fs::write(
+        &scene,
+        r#"
+[[buildings]]
+name = "a"
+masses = [1.0e5, 1.0e5]
+story_stiffness = [4.0e7, 4.0e7]
+initial_velocity = [0.5, 1.0]
+[[buildings]]
+name = "b"
+masses = [1.0e5, 1.0e5]
+story_stiffness = [5.0e7, 5.0e7]
+[[contacts]]
+left = "a"
+left_floor = 2
+right = "b"
+right_floor = 2
+gap = 0.01
+[[contacts]]
+left = "a"
+left_floor = 1
+right = "b"
+right_floor = 1
+gap = 0.01
+[analysis]
+duration = 3.0
+"#,
+    )
+    .unwrap();
+    let case = CaseSpec::new(scene.to_str().unwrap(), solvers::Method::Momentum);
+    let with_contact = studies::sweep::run_case(&case, &dir);
+    assert!(with_contact.ok().unwrap().impacts > 0, "the scene pounds");
+    let base = studies::sweep::run_case(&case.baseline(), &dir);
+    let o = base.ok().expect("baseline runs");
+    assert_eq!(o.impacts, 0, "baseline of a two-contact scene still pounds");
+}
