@@ -77,7 +77,9 @@ pub fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<(), Out
 /// a = M⁻¹ (f_contact − C u̇ − K u) (exact for the gap element and for the momentum method
 /// with all modes; with fewer modes the equilibrium acceleration of the reconstructed
 /// motion, and at an impact instant the regular part only, the impulse being in the JSON);
-/// inter-story drifts `<building>_drift<story>_m` = u_j − u_{j−1}; story shears
+/// inter-story drifts `<building>_drift<story>_m` = u_j − u_{j−1}; drift ratios
+/// `<building>_drift_ratio<story>` = (u_j − u_{j−1}) / h_j (dimensionless; only for buildings
+/// whose scene entry gives `story_height`); story shears
 /// `<building>_V<story>_N` = k_j (u_j − u_{j−1}); contact forces `contact<i>_force_N`
 /// (compressive > 0).
 pub fn history_csv(scene: &Scene, history: &History) -> Result<String, OutputError> {
@@ -96,7 +98,18 @@ pub fn history_csv(scene: &Scene, history: &History) -> Result<String, OutputErr
         ("drift", "_m"),
         ("V", "_N"),
     ];
+    // Story heights per building, where the scene gives them (drift ratios).
+    let heights = |bi: usize| scene.story_heights.get(bi).and_then(|h| h.as_ref());
     for (q, unit) in cols {
+        if q == "V" {
+            for (bi, b) in scene.buildings.iter().enumerate() {
+                if heights(bi).is_some() {
+                    for f in 1..=b.n_floors() {
+                        header.push(format!("{}_drift_ratio{f}", b.name));
+                    }
+                }
+            }
+        }
         for b in &scene.buildings {
             for f in 1..=b.n_floors() {
                 header.push(format!("{}_{q}{f}{unit}", b.name));
@@ -186,6 +199,16 @@ pub fn history_csv(scene: &Scene, history: &History) -> Result<String, OutputErr
             for &x in ub.iter().take(b.n_floors()) {
                 row.push(fmt(x - below));
                 below = x;
+            }
+        }
+        for (bi, b) in scene.buildings.iter().enumerate() {
+            if let Some(h) = heights(bi) {
+                let ub = &u[floors(bi)];
+                let mut below = 0.0;
+                for (&x, hj) in ub.iter().take(b.n_floors()).zip(h) {
+                    row.push(fmt((x - below) / hj));
+                    below = x;
+                }
             }
         }
         for (bi, b) in scene.buildings.iter().enumerate() {

@@ -375,3 +375,50 @@ fn resolved_scene_reruns_the_same_analysis() {
     assert_eq!(va["buildings"], vb["buildings"]);
     assert_eq!(va["impacts"], vb["impacts"]);
 }
+
+/// With story heights the history also has drift ratios, drift / h per story, after the
+/// drifts; without them it has none (the test above counts the columns).
+#[test]
+fn history_has_drift_ratios_where_story_heights_are_given() {
+    let d = TempDir::new("histratio");
+    let scene = d.write("free.toml", FREE_SCENE);
+    let hist = d.path("hist.csv");
+    let o = pound(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--method",
+        "momentum",
+        "--no-baseline",
+        "--set",
+        "buildings.0.story_height=3.5",
+        "--set",
+        "buildings.1.story_height=[4.0, 3.0]",
+        "--history",
+        hist.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let c = Csv::read(&hist);
+    assert_eq!(c.header.len(), 2 + 6 * 5 + 1, "{:?}", c.header);
+    let mut checked = 0;
+    for (b, h) in [
+        ("left", vec![3.5, 3.5, 3.5]),
+        ("right, east", vec![4.0, 3.0]),
+    ] {
+        for (j, hj) in h.iter().enumerate() {
+            let (idr, irat) = (
+                c.col(&format!("{b}_drift{}_m", j + 1)),
+                c.col(&format!("{b}_drift_ratio{}", j + 1)),
+            );
+            assert!(
+                idr < irat && irat < c.col(&format!("{b}_V1_N")),
+                "column order"
+            );
+            // Both columns are printed with 10 significant digits.
+            for r in &c.rows {
+                assert!((r[irat] - r[idr] / hj).abs() <= 2e-9 * (r[idr] / hj).abs() + 1e-300);
+                checked += (r[idr] != 0.0) as usize;
+            }
+        }
+    }
+    assert!(checked > 100, "{checked} non-zero drifts compared");
+}
