@@ -85,7 +85,7 @@ pub struct ContactFlexibility {
 
 /// Overlap audit of one facing floor pair without a contact of its own (see
 /// [`crate::overlap`]): floors that pass through each other in the model.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
 pub struct Overlap {
     /// Left building and floor (1-based), as in the scene, oriented as the contact whose gap
     /// is used.

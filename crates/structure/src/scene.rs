@@ -954,7 +954,9 @@ fn validate(raw: RawScene, origin: &str, base_dir: &Path) -> Result<Scene, Scene
                         ),
                     ));
                 }
-                f.pairs
+                // Highest pair first: contact 0 of the entry is at the roofs when they face
+                // each other (the contact the studies report, as for a roof-only scene).
+                f.pairs.into_iter().rev().collect()
             }
             (None, Some(lf), Some(rf)) => vec![(
                 floor(lf, left, "left_floor")?,

@@ -848,7 +848,9 @@ fn aligned_floors_without_heights_join_floor_i_to_floor_i() {
     )
     .unwrap();
     assert_eq!(s.contacts.len(), 15);
-    for (i, c) in s.contacts.iter().enumerate() {
+    // Highest pair first.
+    for (k, c) in s.contacts.iter().enumerate() {
+        let i = 14 - k;
         assert_eq!((c.left, c.left_dof, c.right, c.right_dof), (0, i, 1, i));
         assert_eq!((c.gap, c.restitution), (0.05, 0.65));
     }
@@ -868,9 +870,9 @@ fn aligned_floors_without_heights_join_floor_i_to_floor_i() {
         .iter()
         .map(|c| (c.left_dof, c.right_dof))
         .collect();
-    assert_eq!(pairs, vec![(0, 0), (1, 1)]);
-    assert_eq!(s.facings(0, 1).pairs, pairs);
-    assert_eq!(s.facings(1, 0).pairs, pairs);
+    assert_eq!(pairs, vec![(1, 1), (0, 0)]);
+    assert_eq!(s.facings(0, 1).pairs, vec![(0, 0), (1, 1)]);
+    assert_eq!(s.facings(1, 0).pairs, vec![(0, 0), (1, 1)]);
 }
 
 /// Building a: stories 4, 3, 3 m (floors at 4, 7, 10 m); building b: 3.5 m each, four
@@ -939,7 +941,7 @@ fn aligned_floors_with_heights_match_elevations_and_list_floor_to_column_facings
         .iter()
         .map(|c| (c.left_dof, c.right_dof))
         .collect();
-    assert_eq!(pairs, vec![(0, 0), (1, 1), (2, 2)]);
+    assert_eq!(pairs, vec![(2, 2), (1, 1), (0, 0)]);
     assert!(s.unmodelled_facings().is_empty());
     let s = load_str(
         HEIGHTS,
@@ -951,7 +953,7 @@ fn aligned_floors_with_heights_match_elevations_and_list_floor_to_column_facings
         .iter()
         .map(|c| (c.left_dof, c.right_dof))
         .collect();
-    assert_eq!(pairs, vec![(1, 1), (2, 2)]);
+    assert_eq!(pairs, vec![(2, 2), (1, 1)]);
     assert_eq!(s.unmodelled_facings().len(), 2);
     // Explicit floor contacts are unaffected by heights; the facings are still reported.
     let explicit = HEIGHTS.replace(

@@ -302,6 +302,13 @@ pub struct CaseOutputs {
     pub peak_closure: Option<f64>,
     /// Contact-floor histories (cases with `history`, except baselines).
     pub contact_history: Option<ContactHistory>,
+    /// Overlap audit (facing floors without a contact of their own): the worst pair, if
+    /// any pair is audited.
+    #[serde(default)]
+    pub worst_overlap: Option<solvers::Overlap>,
+    /// How many audited pairs overlap beyond the gap.
+    #[serde(default)]
+    pub overlaps_beyond_gap: usize,
 }
 
 /// The record of one case: parameters, outputs or failure, wall time.
@@ -525,6 +532,8 @@ pub fn run_case(spec: &CaseSpec, studies_dir: &Path) -> CaseResult {
         r_n: run.r_n.first().map(|r| (r.r_n_left, r.r_n_right)),
         peak_closure,
         contact_history,
+        worst_overlap: solvers::overlap::worst(&run.overlaps).cloned(),
+        overlaps_beyond_gap: run.overlaps.iter().filter(|o| o.max_overlap > 0.0).count(),
     };
     CaseResult {
         spec: spec.clone(),

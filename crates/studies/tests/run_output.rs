@@ -422,3 +422,76 @@ fn history_has_drift_ratios_where_story_heights_are_given() {
     }
     assert!(checked > 100, "{checked} non-zero drifts compared");
 }
+
+/// The overlap audit (issue 11): the roof-only paper scene warns on stderr naming the worst
+/// pair, lists the overlaps in the summary and in the JSON (`overlaps`, `unmodelled`); the
+/// aligned scene has nothing to audit and no warning.
+#[test]
+fn overlaps_warn_and_are_reported() {
+    let d = TempDir::new("overlaps");
+    let out = d.path("run.json");
+    let o = pound(&[
+        "run",
+        &scene(),
+        "--method",
+        "momentum",
+        "--no-baseline",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let err = String::from_utf8_lossy(&o.stderr);
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    let ov = v["overlaps"].as_array().unwrap();
+    assert_eq!(ov.len(), 14);
+    assert_eq!(v["unmodelled"], serde_json::json!([]));
+    let worst = ov
+        .iter()
+        .max_by(|a, b| {
+            a["max_overlap"]
+                .as_f64()
+                .unwrap()
+                .total_cmp(&b["max_overlap"].as_f64().unwrap())
+        })
+        .unwrap();
+    assert!(worst["max_overlap"].as_f64().unwrap() > 0.0);
+    let named = format!(
+        "worst: building1 floor {} / building2 floor {}",
+        worst["left_floor"], worst["right_floor"]
+    );
+    assert!(err.contains("warning:") && err.contains(&named), "{err}");
+    // The summary lists them.
+    let o = pound(&["run", &scene(), "--method", "gap", "--no-baseline"]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.contains("overlaps (facing floors without a contact"),
+        "{text}"
+    );
+    assert!(
+        text.contains("building1 floor 1 / building2 floor 1: -"),
+        "{text}"
+    );
+    // Contact at every floor: nothing to audit, no warning.
+    let aligned = scene().replace("scene.toml", "scene-aligned.toml");
+    let o = pound(&[
+        "run",
+        &aligned,
+        "--method",
+        "momentum",
+        "--no-baseline",
+        "--set",
+        "analysis.duration=12",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("overlap"));
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    assert_eq!(v["overlaps"], serde_json::json!([]));
+    assert_eq!(
+        v["resolved_scene"]["contacts"].as_array().unwrap().len(),
+        15
+    );
+}

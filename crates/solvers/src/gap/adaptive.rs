@@ -518,7 +518,7 @@ fn dense_overlaps(
 ) {
     let n = sys.n;
     let len = th_end * dp.h;
-    if !(len > 0.0) {
+    if len <= 0.0 {
         return;
     }
     for k in 0..ov.pairs.len() {
@@ -534,7 +534,7 @@ fn dense_overlaps(
             y1[n + l] - y1[n + r],
         );
         ov.offer(k, t + len, ye);
-        if !(yd0 > 0.0) {
+        if yd0 <= 0.0 {
             continue;
         }
         let Some((_, h)) = crate::response::hermite_extremum(y0, yd0, ye, yde, len) else {

@@ -25,6 +25,42 @@ use super::impulse::{solve_checked, ContactGeom};
 use super::modal::{Arc, Modal};
 use crate::SolverError;
 
+/// χ(τ): displacement at τ of a mode (ω, ζ) under a unit constant load from rest,
+/// x'' + 2ζω x' + ω² x = 1, x(0) = x'(0) = 0.
+///
+/// For ωτ ≤ 0.5 by its Taylor series, whose terms a_k = x⁽ᵏ⁾(0) τᵏ/k! follow from the
+/// equation: a_0 = a_1 = 0, a_2 = τ²/2, a_{k+2} = −(2ζωτ a_{k+1})/(k+2) − (ω²τ² a_k)/((k+1)(k+2)).
+/// The closed form 1/ω² − (homogeneous part) loses every digit to cancellation when ωτ is
+/// small (χ ≈ τ²/2 ≪ 1/ω²): on the very short segments that Brent's method tries while
+/// locating a release it returned 0 for every mode and made the force system singular.
+pub fn unit_load_displacement(omega: f64, zeta: f64, tau: f64) -> f64 {
+    if omega * tau > 0.5 {
+        Arc::new(omega, zeta, 0.0, 0.0, 1.0, 1.0, tau).xv(tau).0
+    } else {
+        unit_load_series(omega, zeta, tau)
+    }
+}
+
+/// The Taylor series of [`unit_load_displacement`] (converges for any ωτ; used for ωτ ≤ 0.5,
+/// where its terms fall at least as (ωτ)/k).
+fn unit_load_series(omega: f64, zeta: f64, tau: f64) -> f64 {
+    let wt = omega * tau;
+    let (b, c) = (2.0 * zeta * wt, wt * wt);
+    // a0 holds a_k, a1 holds a_{k+1}; the next term is a_{k+2}.
+    let (mut a0, mut a1) = (0.0, 0.5 * tau * tau);
+    let mut sum = a1;
+    for k in 1..80 {
+        let kf = k as f64;
+        let a2 = -(b * a1) / (kf + 2.0) - (c * a0) / ((kf + 1.0) * (kf + 2.0));
+        sum += a2;
+        if a2.abs() <= 1e-18 * sum.abs() && a1.abs() <= 1e-18 * sum.abs() {
+            break;
+        }
+        (a0, a1) = (a1, a2);
+    }
+    sum
+}
+
 /// Constant forces (N) on the persistent contacts `set` over a segment of length `tau`,
 /// given the free (λ = 0) end gaps `delta_free`.
 pub fn contact_forces(
@@ -36,11 +72,7 @@ pub fn contact_forces(
     time: f64,
 ) -> Result<Vec<f64>, SolverError> {
     let chi: Vec<f64> = (0..modal.len())
-        .map(|n| {
-            Arc::new(modal.omega[n], modal.zeta[n], 0.0, 0.0, 1.0, 1.0, tau)
-                .xv(tau)
-                .0
-        })
+        .map(|n| unit_load_displacement(modal.omega[n], modal.zeta[n], tau))
         .collect();
     let c: Vec<Vec<f64>> = set
         .iter()
@@ -59,4 +91,44 @@ pub fn contact_forces(
         contacts: set.to_vec(),
         context: "holding forces of a persistent-contact phase".into(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The series agrees with the closed form where the latter is accurate (ωτ ≥ 0.3, at
+    /// most a factor 1/(ωτ)² ≈ 11 of cancellation), matches the first three Taylor terms
+    /// for tiny τ (where the closed form returns 0), and is exact for the undamped mode.
+    #[test]
+    fn unit_load_displacement_is_accurate_for_short_and_long_segments() {
+        let (w, z) = (20.0, 0.05);
+        for wt in [0.3, 0.4, 0.5, 1.0, 3.0] {
+            let tau = wt / w;
+            let closed = Arc::new(w, z, 0.0, 0.0, 1.0, 1.0, tau).xv(tau).0;
+            let series = unit_load_series(w, z, tau);
+            assert!(
+                (series - closed).abs() <= 1e-13 * closed,
+                "ωτ = {wt}: {series} vs {closed}"
+            );
+        }
+        for tau in [1e-17, 1e-10, 1e-6] {
+            let x = unit_load_displacement(w, z, tau);
+            let wt = w * tau;
+            // τ²/2 − ζωτ³/3 + (4ζ² − 1)ω²τ⁴/24; the next term is O((ωτ)³) relative.
+            let taylor =
+                0.5 * tau * tau * (1.0 - 2.0 * z * wt / 3.0 + (4.0 * z * z - 1.0) * wt * wt / 12.0);
+            assert!(
+                x > 0.0 && (x - taylor).abs() <= (wt.powi(3) + 1e-15) * taylor,
+                "{tau}: {x} vs {taylor}"
+            );
+        }
+        // Undamped, ωτ = 0.5: (1 − cos ωτ)/ω² = 2 sin²(ωτ/2)/ω².
+        let x = unit_load_displacement(w, 0.0, 0.5 / w);
+        let exact = 2.0 * (0.25f64).sin().powi(2) / (w * w);
+        assert!(
+            (x - exact).abs() <= 4.0 * f64::EPSILON * exact,
+            "{x} vs {exact}"
+        );
+    }
 }

@@ -538,7 +538,7 @@ impl<'a> Stepper<'a> {
             let (l, i, r, j) = (op.left, op.left_dof, op.right, op.right_dof);
             let y1 = u[l][i] - u[r][j];
             self.overlaps.offer(k, t, y1);
-            if !(len > 0.0) {
+            if len <= 0.0 {
                 continue;
             }
             let (y0, yd0, yd1) = (
@@ -546,7 +546,7 @@ impl<'a> Stepper<'a> {
                 udp[l][i] - udp[r][j],
                 ud[l][i] - ud[r][j],
             );
-            if !(yd0 > 0.0) {
+            if yd0 <= 0.0 {
                 continue;
             }
             let Some((th, h)) = peaks::hermite_extremum(y0, yd0, y1, yd1, len) else {

@@ -1,4 +1,9 @@
 //! Study 1 (`paper`): Tables 1 and 2 and Figures 1 and 2 of Conoscente, Hamburger & Johnson.
+//!
+//! The main model (`scene`) has contact at every pair of facing floors (`floors =
+//! "aligned"`, issue 11); the paper's own model, contact at the roofs only
+//! (`roof_only_scene`), is a column beside it, with its overlap audit: how far the floors
+//! without a contact pass through each other beyond the gap (`RunOutput::overlaps`).
 
 use serde::Deserialize;
 use solvers::Method;
@@ -26,7 +31,10 @@ struct Reference {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct Def {
+    /// The main model: contact at every facing floor pair.
     scene: String,
+    /// The paper's model: contact at the roofs only.
+    roof_only_scene: String,
     #[serde(default = "default_pga")]
     pga: f64,
     record_x: String,
@@ -47,6 +55,8 @@ enum Variant {
     MomentumFew(usize),
     PaperImpulse(usize),
     GapElement,
+    /// The paper's roof-only contact, momentum method with all modes.
+    RoofOnly,
 }
 
 impl Variant {
@@ -56,6 +66,7 @@ impl Variant {
             Variant::MomentumFew(n) => format!("momentum, {n} modes"),
             Variant::PaperImpulse(n) => format!("paper impulse, {n} modes"),
             Variant::GapElement => format!("gap element k = {:e}", d.gap_stiffness),
+            Variant::RoofOnly => "roof-only contact (paper's model), momentum".into(),
         }
     }
 }
@@ -66,12 +77,18 @@ fn x_variants(d: &Def) -> Vec<Variant> {
     v.extend(d.fewer_modes.iter().map(|&n| Variant::MomentumFew(n)));
     v.push(Variant::PaperImpulse(d.paper_impulse_modes));
     v.push(Variant::GapElement);
+    v.push(Variant::RoofOnly);
     v
 }
 
 fn case(ctx: &Ctx, d: &Def, record: &str, gap: f64, v: Variant) -> CaseSpec {
+    let scene = if v == Variant::RoofOnly {
+        &d.roof_only_scene
+    } else {
+        &d.scene
+    };
     let base = |m| {
-        ctx.case(&d.scene, m, record, d.pga)
+        ctx.case(scene, m, record, d.pga)
             .with("contacts.0.gap", format!("{gap:?}"))
             .with("contacts.0.restitution", "1.0")
             .param("gap_m", gap)
@@ -80,6 +97,9 @@ fn case(ctx: &Ctx, d: &Def, record: &str, gap: f64, v: Variant) -> CaseSpec {
         Variant::MomentumAll => base(Method::Momentum)
             .with("momentum.impulse", "consistent")
             .param("variant", "momentum, all modes"),
+        Variant::RoofOnly => base(Method::Momentum)
+            .with("momentum.impulse", "consistent")
+            .param("variant", "momentum, all modes, roof-only contact"),
         Variant::MomentumFew(n) => base(Method::Momentum)
             .with("momentum.impulse", "consistent")
             .with("momentum.modes", n)
@@ -99,8 +119,10 @@ fn case(ctx: &Ctx, d: &Def, record: &str, gap: f64, v: Variant) -> CaseSpec {
     }
 }
 
-fn history_case(ctx: &Ctx, d: &Def) -> CaseSpec {
-    case(ctx, d, &d.record_x, 0.10, Variant::MomentumAll)
+/// Figure 2: the roof histories of the main model (`MomentumAll`) or of the paper's
+/// roof-only model (`RoofOnly`), 10 cm gap.
+fn history_case(ctx: &Ctx, d: &Def, v: Variant) -> CaseSpec {
+    case(ctx, d, &d.record_x, 0.10, v)
         .history(true)
         .param("figure", "2")
 }
@@ -115,7 +137,8 @@ impl Study for Paper {
             }
             v.push(case(ctx, &d, &d.record_y, gap, Variant::MomentumAll));
         }
-        v.push(history_case(ctx, &d));
+        v.push(history_case(ctx, &d, Variant::MomentumAll));
+        v.push(history_case(ctx, &d, Variant::RoofOnly));
         Ok(v)
     }
 
@@ -257,7 +280,7 @@ impl Study for Paper {
             let header_refs: Vec<&str> = header.iter().map(|h| h.as_str()).collect();
             let mut t = Table::new(
                 &format!(
-                    "Table 2, {cm:.0} cm gap: amplification factors of the maximum story shear (c_r = 1), X = {}",
+                    "Table 2, {cm:.0} cm gap: amplification factors of the maximum story shear (c_r = 1), X = {}; contact at every facing floor, except the roof-only column (the paper's model)",
                     record_label(&d.record_x),
                 ),
                 &header_refs,
@@ -345,6 +368,44 @@ impl Study for Paper {
             t.write(&ctx.dir, &format!("table2_gap{cm:.0}cm"))?;
             tables.push(t);
         }
+        // The roof-only model's overlap audit (and the main model's, which has none).
+        let mut tov = Table::new(
+            "Roof-only contact (the paper's model): facing floors without a contact, largest overlap u1 − u2 − gap beyond the gap (momentum, all modes, X component)",
+            &["gap (cm)", "pairs audited beyond the gap", "worst floor", "max overlap (m)", "time (s)"],
+        );
+        for &gap in &d.gaps {
+            let cm = (gap * 100.0).round();
+            let roof = res.out(&case(ctx, &d, &d.record_x, gap, Variant::RoofOnly));
+            if let Some(o) = roof {
+                let w = o.worst_overlap.as_ref();
+                tov.push(vec![
+                    format!("{cm:.0}"),
+                    o.overlaps_beyond_gap.to_string(),
+                    w.map_or("–".into(), |w| {
+                        format!("{} / {}", w.left_floor, w.right_floor)
+                    }),
+                    f(w.map(|w| w.max_overlap), 4),
+                    f(w.map(|w| w.time), 3),
+                ]);
+                if let Some(w) = w {
+                    reading.push(format!(
+                        "{cm:.0} cm gap, roof-only contact (the paper's model): {} of the floor pairs below the roofs pass through each other beyond the gap, worst floor {} of {} against floor {} of {}, by {:.1} cm at {:.2} s; with contact at every facing floor (the main model) there is no pair left to audit{}.",
+                        o.overlaps_beyond_gap,
+                        w.left_floor,
+                        w.left,
+                        w.right_floor,
+                        w.right,
+                        100.0 * w.max_overlap,
+                        w.time,
+                        match res.out(&case(ctx, &d, &d.record_x, gap, Variant::MomentumAll)) {
+                            Some(m) if m.worst_overlap.is_some() => " (but the main model lists some: check the scene)",
+                            _ => "",
+                        }
+                    ));
+                }
+            }
+        }
+        tov.write(&ctx.dir, "table2_overlaps")?;
         figure(
             &ctx.dir,
             "table2_profiles",
@@ -354,8 +415,10 @@ impl Study for Paper {
             "Amplification factor over height (Table 2, X component): paper and pound's variants.",
         )?;
 
-        // Figure 2.
-        let hc = history_case(ctx, &d);
+        // Figure 2: the roof histories of the main model, and a zoom on the relative
+        // displacement at the roofs δ = u1 − u2 of both models with the gap line.
+        let hc = history_case(ctx, &d, Variant::MomentumAll);
+        let hroof = history_case(ctx, &d, Variant::RoofOnly);
         let mut fig2_caption = String::new();
         if let Some(h) = res
             .out(&hc)
@@ -375,28 +438,47 @@ impl Study for Paper {
                 .zip(&h.u_right)
                 .map(|(t, u)| (*t, u + gap))
                 .collect();
-            let marks: Vec<(f64, f64)> = o
-                .impact_times
+            let delta = |h: &crate::sweep::ContactHistory| -> Vec<(f64, f64)> {
+                h.time
+                    .iter()
+                    .zip(h.u_left.iter().zip(&h.u_right))
+                    .map(|(t, (a, b))| (*t, a - b))
+                    .collect()
+            };
+            // Impacts at the roofs (contact 0) only: those of the other floors are not on
+            // these curves.
+            let roof_marks = |o: &crate::sweep::CaseOutputs, h: &crate::sweep::ContactHistory| {
+                o.impact_times
+                    .iter()
+                    .filter_map(|&ti| {
+                        let i = h.time.partition_point(|t| *t < ti).min(h.time.len() - 1);
+                        let d = h.u_left[i] - h.u_right[i];
+                        ((d - gap).abs() <= 1e-6 * gap).then_some((h.time[i], d))
+                    })
+                    .collect::<Vec<(f64, f64)>>()
+            };
+            let marks = roof_marks(o, h);
+            let marks_u: Vec<(f64, f64)> = marks
                 .iter()
-                .map(|&ti| {
-                    let i = h.time.partition_point(|t| *t < ti).min(h.time.len() - 1);
+                .map(|&(t, _)| {
+                    let i = h.time.partition_point(|x| *x < t).min(h.time.len() - 1);
                     (h.time[i], h.u_left[i])
                 })
                 .collect();
-            let panel = Panel {
+            let full = Panel {
                 title: format!(
-                    "Top floors, {:.0} cm gap, momentum method (all modes), {}",
+                    "Roofs, {:.0} cm gap, contact at every floor, momentum method (all modes), {}",
                     gap * 100.0,
                     record_label(&d.record_x)
                 ),
                 x_label: "time (s)".into(),
                 y_label: "displacement (m)".into(),
                 series: vec![
-                    Series::line(&format!("{} top floor u1", names[0]), u1, 0).width(1),
-                    Series::line(&format!("{} top floor u2 + gap", names[1]), u2, 1).width(1),
+                    Series::line(&format!("{} roof u1", names[0]), u1, 0).width(1),
+                    Series::line(&format!("{} roof u2 + gap", names[1]), u2, 1).width(1),
                     Series::points(
-                        &format!("impacts ({})", o.impacts),
-                        marks,
+                        &format!("roof impacts ({})", marks_u.len()),
+                        marks_u,
                         3,
                         Marker::Circle,
                     ),
@@ -404,8 +486,54 @@ impl Study for Paper {
                 legend_right: true,
                 ..Default::default()
             };
+            // Zoom: from 1 s before the first impact, 6 s long.
+            let t0 = o.impact_times.first().map_or(0.0, |t| (t - 1.0).max(0.0));
+            let t1 = (t0 + 6.0).min(h.time.last().copied().unwrap_or(t0 + 6.0));
+            let window = |p: Vec<(f64, f64)>| -> Vec<(f64, f64)> {
+                p.into_iter()
+                    .filter(|(t, _)| *t >= t0 && *t <= t1)
+                    .collect()
+            };
+            let mut zoom_series =
+                vec![
+                    Series::line("δ = u1 − u2, contact at every floor", window(delta(h)), 0)
+                        .width(1),
+                ];
+            if let Some(hr) = res.out(&hroof).and_then(|o| o.contact_history.as_ref()) {
+                zoom_series.push(
+                    Series::line("δ, roof-only contact (paper)", window(delta(hr)), 1)
+                        .width(1)
+                        .dashed(),
+                );
+            }
+            zoom_series.push(Series::line("gap", vec![(t0, gap), (t1, gap)], 7).dashed());
+            zoom_series.push(Series::points(
+                "roof impacts (every floor)",
+                window(marks),
+                3,
+                Marker::Circle,
+            ));
+            // Headroom above the gap line for the legend.
+            let lo = zoom_series
+                .iter()
+                .flat_map(|sr| sr.points.iter().map(|p| p.1))
+                .fold(0.0, f64::min);
+            let zoom = Panel {
+                title: format!(
+                    "Zoom: relative displacement of the roofs δ = u1 − u2, {:.1}–{:.1} s; impacts where δ reaches the gap",
+                    t0, t1
+                ),
+                x_label: "time (s)".into(),
+                y_label: "δ (m)".into(),
+                series: zoom_series,
+                x_range: Some((t0, t1)),
+                y_range: Some((lo - 0.05 * (gap - lo), gap + 0.45 * (gap - lo))),
+                legend_right: false,
+                ..Default::default()
+            };
             fig2_caption = format!(
-                "Figure 2: top-floor displacements, {names0} (u1) and {names1} shifted by the 10 cm gap (u2 + gap): where the curves touch the buildings collide; {} impacts marked.",
+                "Figure 2: roofs of {names0} (u1) and {names1} (u2 + 10 cm gap), contact at every floor ({} roof impacts of {}); below, δ = u1 − u2 at the roofs, both models, and the gap.",
+                roof_marks(o, h).len(),
                 o.impacts,
                 names0 = names[0],
                 names1 = names[1]
@@ -413,9 +541,9 @@ impl Study for Paper {
             figure(
                 &ctx.dir,
                 "figure2_histories",
-                (1200, 480),
-                (1, 1),
-                &[PanelKind::Xy(panel)],
+                (1200, 900),
+                (2, 1),
+                &[PanelKind::Xy(full), PanelKind::Xy(zoom)],
                 &fig2_caption,
             )?;
             let mut th = Table::new("Figure 2 data", &["time_s", "u1_top_m", "u2_top_m"]);
@@ -447,6 +575,7 @@ impl Study for Paper {
         }
         let mut all_tables: Vec<&Table> = vec![&t1];
         all_tables.extend(tables.iter());
+        all_tables.push(&tov);
         write_summary(
             ctx,
             "Study 1: the paper reproduced",
