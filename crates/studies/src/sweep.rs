@@ -803,7 +803,7 @@ fn opt_e(v: Option<f64>) -> String {
     v.map(|x| format!("{x:e}")).unwrap_or_default()
 }
 
-const OUTPUT_COLUMNS: [Column; 19] = [
+const OUTPUT_COLUMNS: [Column; 21] = [
     ("impacts", |o| o.impacts.to_string()),
     ("persistent_contacts", |o| o.persistent_contacts.to_string()),
     ("restitution_mean", |o| opt_e(o.restitution_mean)),
@@ -818,6 +818,10 @@ const OUTPUT_COLUMNS: [Column; 19] = [
     }),
     ("approach_speed_max_m_per_s", |o| {
         opt_e(o.approach_speed_max)
+    }),
+    ("overlaps_beyond_gap", |o| o.overlaps_beyond_gap.to_string()),
+    ("overlap_max_m", |o| {
+        opt_e(o.worst_overlap.as_ref().map(|w| w.max_overlap))
     }),
     ("peak_closure_m", |o| opt_e(o.peak_closure)),
     ("energy_input_J", |o| format!("{:e}", o.energy_input)),
