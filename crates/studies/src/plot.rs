@@ -780,8 +780,10 @@ struct PanelLayout {
     yt: Vec<Tick>,
     xl: Vec<f64>,
     yl: Vec<f64>,
-    /// Axis descriptions wrapped to lines.
+    /// Axis descriptions wrapped to lines; `y_top`: a y description too long to stand
+    /// beside the plot, set above it.
     x_desc: Vec<String>,
+    y_top: Vec<String>,
     y_desc: Vec<String>,
     y_area: f64,
     x_area: f64,
@@ -800,6 +802,7 @@ fn layout_panel(
     pw: f64,
     plot_h: Option<f64>,
     aspect: f64,
+    y_above: bool,
     sz: &Sz,
 ) -> PanelLayout {
     let (title_s, log_x, log_y) = match kind {
@@ -807,7 +810,7 @@ fn layout_panel(
         PanelKind::Heat(h) => (&h.title, h.log_x, h.log_y),
     };
     let title = wrap(title_s, sz.title, pw - 2.0 * sz.gap);
-    let title_h = if title.is_empty() {
+    let mut title_h = if title.is_empty() {
         sz.gap
     } else {
         title.len() as f64 * line_h(sz.title) + 0.5 * sz.gap
@@ -897,7 +900,15 @@ fn layout_panel(
     let guess_w = 0.7 * pw;
     let guess_h = plot_h.unwrap_or(aspect * guess_w);
     // The y description may reach down beside the x tick labels.
-    let y_desc = wrap(y_s, sz.label, guess_h + 2.0 * tick + ink_h(sz.base));
+    // The y description beside the plot when it fits on two rotated lines, else (or when
+    // `y_above`) horizontal above the plot, below the title.
+    let mut y_desc = wrap(y_s, sz.label, top + guess_h + 2.0 * tick + ink_h(sz.base));
+    let mut y_top = Vec::new();
+    if y_desc.len() > 2 || (y_above && !y_desc.is_empty()) {
+        y_top = wrap(y_s, sz.label, pw - 2.0 * sz.gap);
+        y_desc.clear();
+        title_h += y_top.len() as f64 * line_h(sz.label);
+    }
     let y_area_of = |yt: &[Tick]| {
         let tw = yt
             .iter()
@@ -932,6 +943,7 @@ fn layout_panel(
         xl,
         yl,
         x_desc,
+        y_top,
         y_desc,
         y_area,
         x_area,
@@ -1014,17 +1026,23 @@ fn layout(
         .collect();
     let shared = shared_legend(&lists, panels.len());
     let is_shared = !shared.is_empty();
+    // Every y description above its plot when one of them has to be.
+    let y_above = panels.iter().any(|k| {
+        !layout_panel(k, is_shared, pw, None, aspect, false, &sz)
+            .y_top
+            .is_empty()
+    });
     let mut first: Vec<PanelLayout> = panels
         .iter()
-        .map(|k| layout_panel(k, is_shared, pw, None, aspect, &sz))
+        .map(|k| layout_panel(k, is_shared, pw, None, aspect, y_above, &sz))
         .collect();
-    // Side by side, a plot narrower than 7.5 em is too cramped at this text size: stack
+    // Side by side, a plot narrower than 7 em is too cramped at this text size: stack
     // the panels in one column instead (taller, not wider).
     let (mut cols, mut rows, mut pw) = (cols, rows, pw);
     if cols > 1
         && first
             .iter()
-            .any(|l| pw - l.y_area - l.right < 7.5 * sz.base)
+            .any(|l| pw - l.y_area - l.right < 7.0 * sz.base)
     {
         cols = 1;
         rows = panels.len().max(1);
@@ -1032,7 +1050,7 @@ fn layout(
         aspect = aspect.min(0.6);
         first = panels
             .iter()
-            .map(|k| layout_panel(k, is_shared, pw, None, aspect, &sz))
+            .map(|k| layout_panel(k, is_shared, pw, None, aspect, y_above, &sz))
             .collect();
     }
     // Align the panels of a row: the same title block, plot height and axis block, so the
@@ -1050,7 +1068,15 @@ fn layout(
         let top = max(&|l| l.top);
         rows_h.push((title_h + top + plot_h + x_area + legend).ceil());
         for &i in &idx {
-            let mut l = layout_panel(&panels[i], is_shared, pw, Some(plot_h), aspect, &sz);
+            let mut l = layout_panel(
+                &panels[i],
+                is_shared,
+                pw,
+                Some(plot_h),
+                aspect,
+                y_above,
+                &sz,
+            );
             l.title_h = title_h;
             l.x_area = x_area;
             panels_l.push(l);
@@ -1206,6 +1232,11 @@ fn draw_panel<DB: DrawingBackend>(
             x0 + 0.5 * pw,
             y0 + 0.2 * sz.gap + i as f64 * line_h(sz.title),
         )?;
+    }
+    let ls = text_style(sz.label, BLACK, HPos::Left, VPos::Top);
+    for (i, line) in l.y_top.iter().enumerate() {
+        let y = y0 + l.title_h - (l.y_top.len() - i) as f64 * line_h(sz.label);
+        put(root, line, &ls, x0 + sz.gap, y)?;
     }
     let chart_y = y0 + l.title_h;
     let chart_h = l.top + l.plot_h + l.x_area;
