@@ -12,7 +12,7 @@
 //! keeps the aspect ratio asked for by `size` (clamped to 0.4 … 0.85).
 //!
 //! Axes: log axes are linear axes in log10 of the data with ticks at whole decades, labelled
-//! 0.001 … 10000 when every tick lies in that range and 10⁻⁶-style otherwise (1-2-5 ticks
+//! 0.001 … 1000 when every tick lies in that range and 10⁻⁶-style otherwise (1-2-5 ticks
 //! when less than two decades are in view); linear axes get 1-2-2.5-5 × 10ⁿ steps, with a
 //! common ×10ⁿ form for very large or small values. Heat maps tick the grid values and have a
 //! colour bar. Files are written atomically (PNG: drawn to a temporary file in the
@@ -273,7 +273,7 @@ fn value_text(v: f64, plain: bool) -> String {
 
 /// Whether values whose decimal exponents lie in `lo ..= hi` read well as plain decimals.
 fn plain_range(lo: i32, hi: i32) -> bool {
-    lo >= -3 && hi <= 4
+    lo >= -3 && hi <= 3
 }
 
 /// A tick: position in plot coordinates (log10 of the value on log axes) and its label.
@@ -320,66 +320,99 @@ fn linear_ticks(lo: f64, hi: f64, n: usize) -> Vec<Tick> {
     }
 }
 
-/// Ticks of a log axis spanning log10 values [lo, hi], at most about `n`, and the light grid
+/// Ticks of a log axis spanning log10 values [lo, hi]: the candidate with the most ticks,
+/// at most `n` of them, from whole decades (every decade, or every k-th), 1-3-10, 1-2-5 and
+/// round linear steps of the values, preferred in that order on a tie; with the light grid
 /// lines (2 … 9 × 10ⁿ) when every decade is ticked.
 fn log_ticks(lo: f64, hi: f64, n: usize) -> (Vec<Tick>, Vec<f64>) {
     let (a, b) = ((lo - 1e-9).ceil() as i32, (hi + 1e-9).floor() as i32);
-    // Up to two decades in view: 1-2-5 × 10ⁿ when they fit.
-    if b - a <= 1 {
+    let inside = |x: f64| x >= lo - 1e-12 && x <= hi + 1e-12;
+    type Cand = (Vec<Tick>, Vec<f64>);
+    let (mut decades, mut mantissas, mut linear): (Vec<Cand>, Vec<Cand>, Vec<Cand>) =
+        Default::default();
+    // Decades, every `stride`-th.
+    if b >= a {
+        let count = (b - a + 1) as usize;
+        let plain = plain_range(a, b);
+        for stride in 1..=count.max(1) as i32 {
+            let ticks: Vec<Tick> = (a..=b)
+                .filter(|d| d.rem_euclid(stride) == 0)
+                .map(|d| {
+                    let t = if plain {
+                        fixed(10f64.powi(d), (-d).max(0) as usize)
+                    } else {
+                        format!("10{}", superscript(d))
+                    };
+                    (f64::from(d), t)
+                })
+                .collect();
+            let mut light = Vec::new();
+            if stride == 1 && count <= 8 {
+                for d in (a - 1)..=b {
+                    for k in 2..=9 {
+                        let x = f64::from(d) + f64::from(k).log10();
+                        if inside(x) {
+                            light.push(x);
+                        }
+                    }
+                }
+            }
+            decades.push((ticks, light));
+        }
+    }
+    // Mantissa sets within the decades.
+    for set in [&[1.0, 3.0][..], &[1.0, 2.0, 5.0][..]] {
         let mut v = Vec::new();
         for d in (lo.floor() as i32)..=(hi.ceil() as i32) {
-            for k in [1.0, 2.0, 5.0] {
+            for &k in set {
                 let x = (k * 10f64.powi(d)).log10();
-                if x >= lo - 1e-12 && x <= hi + 1e-12 {
+                if inside(x) {
                     v.push((x, k, d));
                 }
             }
         }
-        if v.len() >= 2 && v.len() <= n.max(2) + 1 {
-            let plain = plain_range(v[0].2, v[v.len() - 1].2);
-            let ticks = v
+        if let (Some(f), Some(l)) = (v.first(), v.last()) {
+            let plain = plain_range(f.2, l.2);
+            let t = v
                 .iter()
                 .map(|&(x, k, d)| (x, value_text(k * 10f64.powi(d), plain)))
                 .collect();
-            return (ticks, vec![]);
+            mantissas.push((t, vec![]));
         }
     }
-    if b - a >= 1 {
-        let count = (b - a + 1) as usize;
-        let stride = count.div_ceil(n.max(2)).max(1) as i32;
-        let plain = plain_range(a, b);
-        let ticks: Vec<Tick> = (a..=b)
-            .filter(|d| d.rem_euclid(stride) == 0)
-            .map(|d| {
-                let t = if plain {
-                    fixed(10f64.powi(d), (-d).max(0) as usize)
-                } else {
-                    format!("10{}", superscript(d))
-                };
-                (f64::from(d), t)
-            })
-            .collect();
-        let mut light = Vec::new();
-        if stride == 1 && count <= 8 {
-            for d in (a - 1)..=b {
-                for k in 2..=9 {
-                    let x = f64::from(d) + f64::from(k).log10();
-                    if x >= lo && x <= hi {
-                        light.push(x);
-                    }
-                }
+    // Round linear steps of the values (less than a decade in view).
+    if hi - lo < 1.0 {
+        for m in (2..=n.max(2)).rev() {
+            let lin: Vec<Tick> = linear_ticks(10f64.powf(lo), 10f64.powf(hi), m)
+                .into_iter()
+                .filter(|t| t.0 > 0.0)
+                .map(|(x, t)| (x.log10(), t))
+                .collect();
+            linear.push((lin, vec![]));
+        }
+    }
+    // Decades when three or more fit, else 1-3 or 1-2-5, else round steps; within a tier
+    // the most ticks (at most n), the first of equals.
+    let most = |c: &[Cand]| -> Option<Cand> {
+        let mut best: Option<&Cand> = None;
+        for x in c {
+            if x.0.len() <= n.max(1) && best.is_none_or(|b| x.0.len() > b.0.len()) {
+                best = Some(x);
             }
         }
-        return (ticks, light);
+        best.cloned()
+    };
+    let tiers = [most(&decades), most(&mantissas), most(&linear)];
+    if let Some(t) = tiers.iter().flatten().find(|t| t.0.len() >= 3) {
+        return t.clone();
     }
-    let lin = linear_ticks(10f64.powf(lo), 10f64.powf(hi), n);
-    (
-        lin.into_iter()
-            .filter(|t| t.0 > 0.0)
-            .map(|(x, t)| (x.log10(), t))
-            .collect(),
-        vec![],
-    )
+    let mut best: Option<&Cand> = None;
+    for t in tiers.iter().flatten() {
+        if best.is_none_or(|b| t.0.len() > b.0.len()) {
+            best = Some(t);
+        }
+    }
+    best.cloned().unwrap_or_default()
 }
 
 /// Ticks and light lines of an axis over plot coordinates [lo, hi] whose labels (em `em`)
@@ -418,21 +451,21 @@ fn axis_ticks(
         need <= length
     };
     // The most ticks (at most 10) whose labels fit; at least two if possible.
-    let mut fallback = None;
     for n in (2..=10).rev() {
         let (t, l) = make(n);
         if t.len() >= 2 && fits(&t) {
             return (t, l);
         }
-        if !t.is_empty()
-            && fallback
-                .as_ref()
-                .is_none_or(|f: &(Vec<Tick>, Vec<f64>)| t.len() < f.0.len())
-        {
-            fallback = Some((t, l));
+    }
+    // Nothing fits: every k-th tick of the sparsest set.
+    let (t, l) = make(2);
+    for k in 2..=t.len().max(2) {
+        let thin: Vec<Tick> = t.iter().step_by(k).cloned().collect();
+        if fits(&thin) || thin.len() <= 1 {
+            return (thin, l);
         }
     }
-    fallback.unwrap_or_default()
+    (t, l)
 }
 
 /// Grid values as ticks, thinned to every k-th so that the labels fit.
@@ -598,43 +631,83 @@ fn entries(p: &Panel) -> Vec<Entry> {
     v
 }
 
-/// Legend entries flowed into rows of at most `width` pixels: (rows of entry indices, row
-/// widths).
-fn legend_rows(e: &[Entry], sz: &Sz, width: f64) -> Vec<(Vec<usize>, f64)> {
-    let mut rows: Vec<(Vec<usize>, f64)> = Vec::new();
-    let mut cur: (Vec<usize>, f64) = (vec![], 0.0);
-    for (i, en) in e.iter().enumerate() {
-        let w = entry_w(en, sz);
-        let sep = if cur.0.is_empty() { 0.0 } else { 1.2 * sz.base };
-        if !cur.0.is_empty() && cur.1 + sep + w > width {
-            rows.push(std::mem::take(&mut cur));
-            cur.0.push(i);
-            cur.1 = w;
-        } else {
-            cur.0.push(i);
-            cur.1 += sep + w;
+/// Legend entries flowed into rows at most `width` wide; a name too long for a row is
+/// wrapped onto several lines.
+#[derive(Debug, Clone, Default)]
+struct Legend {
+    entries: Vec<Entry>,
+    /// Wrapped name of each entry.
+    names: Vec<Vec<String>>,
+    /// Rows: entry indices, width, lines.
+    rows: Vec<(Vec<usize>, f64, usize)>,
+}
+
+impl Legend {
+    fn new(entries: Vec<Entry>, sz: &Sz, width: f64) -> Legend {
+        let text_w = (width - sample_w(sz) - 0.4 * sz.base).max(4.0 * sz.base);
+        let names: Vec<Vec<String>> = entries
+            .iter()
+            .map(|e| {
+                if text::width(&e.name, sz.base) <= text_w {
+                    vec![e.name.clone()]
+                } else {
+                    wrap(&e.name, sz.base, text_w)
+                }
+            })
+            .collect();
+        let entry_w = |i: usize| {
+            sample_w(sz)
+                + 0.4 * sz.base
+                + names[i]
+                    .iter()
+                    .map(|l| text::width(l, sz.base))
+                    .fold(0.0, f64::max)
+        };
+        let mut rows: Vec<(Vec<usize>, f64, usize)> = Vec::new();
+        let mut cur: (Vec<usize>, f64, usize) = (vec![], 0.0, 0);
+        for (i, name) in names.iter().enumerate() {
+            let w = entry_w(i);
+            let sep = if cur.0.is_empty() { 0.0 } else { 1.2 * sz.base };
+            if !cur.0.is_empty() && cur.1 + sep + w > width {
+                rows.push(std::mem::take(&mut cur));
+                cur = (vec![i], w, name.len());
+            } else {
+                cur.0.push(i);
+                cur.1 += sep + w;
+                cur.2 = cur.2.max(name.len());
+            }
+        }
+        if !cur.0.is_empty() {
+            rows.push(cur);
+        }
+        Legend {
+            entries,
+            names,
+            rows,
         }
     }
-    if !cur.0.is_empty() {
-        rows.push(cur);
+    fn is_empty(&self) -> bool {
+        self.entries.is_empty()
     }
-    rows
+    fn height(&self, sz: &Sz) -> f64 {
+        if self.rows.is_empty() {
+            0.0
+        } else {
+            self.rows.iter().map(|r| r.2).sum::<usize>() as f64 * line_h(sz.base) + sz.gap
+        }
+    }
+    fn entry_w(&self, i: usize, sz: &Sz) -> f64 {
+        sample_w(sz)
+            + 0.4 * sz.base
+            + self.names[i]
+                .iter()
+                .map(|l| text::width(l, sz.base))
+                .fold(0.0, f64::max)
+    }
 }
 
 fn sample_w(sz: &Sz) -> f64 {
     2.0 * sz.base
-}
-
-fn entry_w(e: &Entry, sz: &Sz) -> f64 {
-    sample_w(sz) + 0.4 * sz.base + text::width(&e.name, sz.base)
-}
-
-fn legend_h(rows: usize, sz: &Sz) -> f64 {
-    if rows == 0 {
-        0.0
-    } else {
-        rows as f64 * line_h(sz.base) + sz.gap
-    }
 }
 
 /// The plot ranges of an x–y panel in plot coordinates.
@@ -700,16 +773,17 @@ struct PanelLayout {
     title: Vec<String>,
     title_h: f64,
     /// Entries drawn below this panel (empty when shared or none).
-    legend: Vec<Entry>,
-    legend_rows: Vec<(Vec<usize>, f64)>,
+    legend: Legend,
     xr: (f64, f64),
     yr: (f64, f64),
     xt: Vec<Tick>,
     yt: Vec<Tick>,
     xl: Vec<f64>,
     yl: Vec<f64>,
-    /// Axis descriptions wrapped to lines.
+    /// Axis descriptions wrapped to lines; `y_top`: a y description too long to stand
+    /// beside the plot, set above it.
     x_desc: Vec<String>,
+    y_top: Vec<String>,
     y_desc: Vec<String>,
     y_area: f64,
     x_area: f64,
@@ -728,6 +802,7 @@ fn layout_panel(
     pw: f64,
     plot_h: Option<f64>,
     aspect: f64,
+    y_above: bool,
     sz: &Sz,
 ) -> PanelLayout {
     let (title_s, log_x, log_y) = match kind {
@@ -735,7 +810,7 @@ fn layout_panel(
         PanelKind::Heat(h) => (&h.title, h.log_x, h.log_y),
     };
     let title = wrap(title_s, sz.title, pw - 2.0 * sz.gap);
-    let title_h = if title.is_empty() {
+    let mut title_h = if title.is_empty() {
         sz.gap
     } else {
         title.len() as f64 * line_h(sz.title) + 0.5 * sz.gap
@@ -767,7 +842,7 @@ fn layout_panel(
             (vec![], xr, yr, Some((gx, gy, h)))
         }
     };
-    let legend_rows = legend_rows(&legend, sz, pw - 2.0 * sz.gap);
+    let legend = Legend::new(legend, sz, pw - 2.0 * sz.gap);
     let tick = f64::from(sz.tick());
     let (x_s, y_s) = match kind {
         PanelKind::Xy(p) => (p.x_label.as_str(), p.y_label.as_str()),
@@ -825,13 +900,21 @@ fn layout_panel(
     let guess_w = 0.7 * pw;
     let guess_h = plot_h.unwrap_or(aspect * guess_w);
     // The y description may reach down beside the x tick labels.
-    let y_desc = wrap(y_s, sz.label, guess_h + 0.6 * x_area);
+    // The y description beside the plot when it fits on two rotated lines, else (or when
+    // `y_above`) horizontal above the plot, below the title.
+    let mut y_desc = wrap(y_s, sz.label, top + guess_h + 2.0 * tick + ink_h(sz.base));
+    let mut y_top = Vec::new();
+    if y_desc.len() > 2 || (y_above && !y_desc.is_empty()) {
+        y_top = wrap(y_s, sz.label, pw - 2.0 * sz.gap);
+        y_desc.clear();
+        title_h += y_top.len() as f64 * line_h(sz.label);
+    }
     let y_area_of = |yt: &[Tick]| {
         let tw = yt
             .iter()
             .map(|t| text::width(&t.1, sz.base))
             .fold(0.0, f64::max);
-        sz.gap + desc_h(y_desc.len()) + tw + 2.0 * tick
+        sz.gap + desc_h(y_desc.len()) + 0.5 * sz.gap + tw + 2.0 * tick
     };
     let (_, _, yt0, _, bar0) = ticks_for(guess_w, guess_h);
     let y_area = y_area_of(&yt0);
@@ -844,7 +927,7 @@ fn layout_panel(
         let over = 0.5 * text::width(&last.1, sz.base) - (xr.1 - last.0) / (xr.1 - xr.0) * plot_w0;
         right = right.max(over);
     }
-    right = right.max(sz.gap) + bar_space;
+    right = (right + 0.5 * sz.gap).max(sz.gap) + bar_space;
     let plot_w = (pw - y_area - right).max(10.0);
     let plot_h = plot_h.unwrap_or(aspect * plot_w).max(10.0);
     let (xt, xl, yt, yl, bar) = ticks_for(plot_w, plot_h);
@@ -853,7 +936,6 @@ fn layout_panel(
         title,
         title_h,
         legend,
-        legend_rows,
         xr,
         yr,
         xt,
@@ -861,6 +943,7 @@ fn layout_panel(
         xl,
         yl,
         x_desc,
+        y_top,
         y_desc,
         y_area,
         x_area,
@@ -871,10 +954,15 @@ fn layout_panel(
     }
 }
 
-/// One legend for all panels: the distinct entries of every panel, when some entry appears in
-/// more than one panel and no two distinct entries look alike (same colour, line and
-/// marker); empty otherwise (each panel keeps its own legend).
-fn shared_legend(lists: &[Vec<Entry>]) -> Vec<Entry> {
+/// One legend for all panels: the only legend of a figure of several panels, or the distinct
+/// entries of every panel when some entry appears in more than one panel and no two distinct
+/// entries look alike (same colour, line and marker); empty otherwise (each panel keeps its
+/// own legend).
+fn shared_legend(lists: &[Vec<Entry>], panels: usize) -> Vec<Entry> {
+    // A single legend in a figure of several panels speaks for all of them.
+    if lists.len() == 1 && panels > 1 {
+        return lists[0].clone();
+    }
     if lists.len() < 2 {
         return vec![];
     }
@@ -909,8 +997,7 @@ struct Layout {
     pw: f64,
     rows_h: Vec<f64>,
     panels: Vec<PanelLayout>,
-    shared: Vec<Entry>,
-    shared_rows: Vec<(Vec<usize>, f64)>,
+    shared: Legend,
     caption: Vec<String>,
 }
 
@@ -927,7 +1014,7 @@ fn layout(
     let pw = sz.w / cols as f64;
     // The plot aspect the caller's size asked for (its panels had ~80 px of decorations).
     let req_ph = (f64::from(size.1) - if caption.is_empty() { 0.0 } else { 34.0 }) / rows as f64;
-    let aspect = ((req_ph - 80.0) / (pw - 80.0)).clamp(0.4, 0.85);
+    let mut aspect = ((req_ph - 80.0) / (pw - 80.0)).clamp(0.4, 0.85);
     // One legend below all panels when every panel with a legend shows the same entries.
     let lists: Vec<Vec<Entry>> = panels
         .iter()
@@ -937,12 +1024,35 @@ fn layout(
         })
         .filter(|e| !e.is_empty())
         .collect();
-    let shared = shared_legend(&lists);
+    let shared = shared_legend(&lists, panels.len());
     let is_shared = !shared.is_empty();
-    let first: Vec<PanelLayout> = panels
+    // Every y description above its plot when one of them has to be.
+    let y_above = panels.iter().any(|k| {
+        !layout_panel(k, is_shared, pw, None, aspect, false, &sz)
+            .y_top
+            .is_empty()
+    });
+    let mut first: Vec<PanelLayout> = panels
         .iter()
-        .map(|k| layout_panel(k, is_shared, pw, None, aspect, &sz))
+        .map(|k| layout_panel(k, is_shared, pw, None, aspect, y_above, &sz))
         .collect();
+    // Side by side, a plot narrower than 7 em is too cramped at this text size: stack
+    // the panels in one column instead (taller, not wider).
+    let (mut cols, mut rows, mut pw) = (cols, rows, pw);
+    if cols > 1
+        && first
+            .iter()
+            .any(|l| pw - l.y_area - l.right < 7.0 * sz.base)
+    {
+        cols = 1;
+        rows = panels.len().max(1);
+        pw = sz.w;
+        aspect = aspect.min(0.6);
+        first = panels
+            .iter()
+            .map(|k| layout_panel(k, is_shared, pw, None, aspect, y_above, &sz))
+            .collect();
+    }
     // Align the panels of a row: the same title block, plot height and axis block, so the
     // plots line up; legends below.
     let mut rows_h = Vec::with_capacity(rows);
@@ -954,24 +1064,32 @@ fn layout(
         let title_h = max(&|l| l.title_h);
         let plot_h = max(&|l| l.plot_h).ceil();
         let x_area = max(&|l| l.x_area);
-        let legend = max(&|l| legend_h(l.legend_rows.len(), &sz));
+        let legend = max(&|l| l.legend.height(&sz));
         let top = max(&|l| l.top);
         rows_h.push((title_h + top + plot_h + x_area + legend).ceil());
         for &i in &idx {
-            let mut l = layout_panel(&panels[i], is_shared, pw, Some(plot_h), aspect, &sz);
+            let mut l = layout_panel(
+                &panels[i],
+                is_shared,
+                pw,
+                Some(plot_h),
+                aspect,
+                y_above,
+                &sz,
+            );
             l.title_h = title_h;
             l.x_area = x_area;
             panels_l.push(l);
         }
     }
-    let shared_rows = legend_rows(&shared, &sz, sz.w - 2.0 * sz.gap);
+    let shared = Legend::new(shared, &sz, sz.w - 2.0 * sz.gap);
     let caption = wrap(caption, sz.base, sz.w - 2.0 * sz.gap);
     let cap_h = if caption.is_empty() {
         0.0
     } else {
         caption.len() as f64 * line_h(sz.base) + sz.gap
     };
-    let height = rows_h.iter().sum::<f64>() + legend_h(shared_rows.len(), &sz) + cap_h;
+    let height = rows_h.iter().sum::<f64>() + shared.height(&sz) + cap_h;
     Layout {
         sz,
         height: height.ceil() as u32,
@@ -980,7 +1098,6 @@ fn layout(
         rows_h,
         panels: panels_l,
         shared,
-        shared_rows,
         caption,
     }
 }
@@ -1014,20 +1131,20 @@ fn put<DB: DrawingBackend>(
 /// Draws legend rows with their top at `y`, centred in [x0, x0 + width].
 fn draw_legend<DB: DrawingBackend>(
     root: &Root<DB>,
-    e: &[Entry],
-    rows: &[(Vec<usize>, f64)],
+    lg: &Legend,
     x0: f64,
     width: f64,
     y: f64,
     sz: &Sz,
 ) -> std::result::Result<(), DErr> {
     let style = text_style(sz.base, BLACK, HPos::Left, VPos::Center);
-    let block = rows.iter().map(|r| r.1).fold(0.0, f64::max);
-    for (r, (idx, _)) in rows.iter().enumerate() {
+    let block = lg.rows.iter().map(|r| r.1).fold(0.0, f64::max);
+    let mut row_top = y;
+    for (idx, _, lines) in &lg.rows {
         let mut x = x0 + 0.5 * (width - block).max(0.0);
-        let yc = y + (r as f64 + 0.5) * line_h(sz.base);
+        let yc = row_top + 0.5 * line_h(sz.base);
         for &i in idx {
-            let en = &e[i];
+            let en = &lg.entries[i];
             let c = color(en.color);
             let (a, b) = (x.round() as i32, (x + sample_w(sz)).round() as i32);
             let yi = yc.round() as i32;
@@ -1048,9 +1165,18 @@ fn draw_legend<DB: DrawingBackend>(
                 }
             }
             draw_marker(root, en.marker, ((a + b) / 2, yi), c, sz)?;
-            put(root, &en.name, &style, x + sample_w(sz) + 0.4 * sz.base, yc)?;
-            x += entry_w(en, sz) + 1.2 * sz.base;
+            for (k, line) in lg.names[i].iter().enumerate() {
+                put(
+                    root,
+                    line,
+                    &style,
+                    x + sample_w(sz) + 0.4 * sz.base,
+                    yc + k as f64 * line_h(sz.base),
+                )?;
+            }
+            x += lg.entry_w(i, sz) + 1.2 * sz.base;
         }
+        row_top += *lines as f64 * line_h(sz.base);
     }
     Ok(())
 }
@@ -1106,6 +1232,11 @@ fn draw_panel<DB: DrawingBackend>(
             x0 + 0.5 * pw,
             y0 + 0.2 * sz.gap + i as f64 * line_h(sz.title),
         )?;
+    }
+    let ls = text_style(sz.label, BLACK, HPos::Left, VPos::Top);
+    for (i, line) in l.y_top.iter().enumerate() {
+        let y = y0 + l.title_h - (l.y_top.len() - i) as f64 * line_h(sz.label);
+        put(root, line, &ls, x0 + sz.gap, y)?;
     }
     let chart_y = y0 + l.title_h;
     let chart_h = l.top + l.plot_h + l.x_area;
@@ -1185,7 +1316,8 @@ fn draw_panel<DB: DrawingBackend>(
     let plot_cy = 0.5 * f64::from(py.start + py.end);
     for (i, line) in l.y_desc.iter().enumerate() {
         let hw = 0.5 * text::width(line, sz.label);
-        let cy = plot_cy.min(chart_y + chart_h - hw).max(chart_y + hw);
+        let bottom = f64::from(py.end) + 2.0 * tick + ink_h(sz.base);
+        let cy = plot_cy.min(bottom - hw).max(chart_y + hw);
         put(
             root,
             line,
@@ -1201,7 +1333,6 @@ fn draw_panel<DB: DrawingBackend>(
         draw_legend(
             root,
             &l.legend,
-            &l.legend_rows,
             x0 + sz.gap,
             pw - 2.0 * sz.gap,
             chart_y + chart_h + 0.3 * sz.gap,
@@ -1514,16 +1645,8 @@ fn draw_all<DB: DrawingBackend>(
         y += rh;
     }
     if !lay.shared.is_empty() {
-        draw_legend(
-            root,
-            &lay.shared,
-            &lay.shared_rows,
-            sz.gap,
-            sz.w - 2.0 * sz.gap,
-            y,
-            sz,
-        )?;
-        y += legend_h(lay.shared_rows.len(), sz);
+        draw_legend(root, &lay.shared, sz.gap, sz.w - 2.0 * sz.gap, y, sz)?;
+        y += lay.shared.height(sz);
     }
     let cs = text_style(sz.base, RGBColor(60, 60, 60), HPos::Left, VPos::Top);
     for (i, line) in lay.caption.iter().enumerate() {
@@ -1597,6 +1720,19 @@ mod tests {
         // Few labels fit: every other decade.
         let (t, _) = log_ticks(-8.5, -0.5, 4);
         assert!(t.len() <= 4 && t.iter().all(|x| x.0 as i32 % 2 == 0));
+        // Less than a decade: 1-3, 1-2-5 or round steps.
+        let l: Vec<String> = log_ticks(-1.82, -0.40, 3)
+            .0
+            .into_iter()
+            .map(|x| x.1)
+            .collect();
+        assert_eq!(l, ["0.03", "0.1", "0.3"]);
+        let l: Vec<String> = log_ticks(-1.82, -0.40, 4)
+            .0
+            .into_iter()
+            .map(|x| x.1)
+            .collect();
+        assert_eq!(l, ["0.02", "0.05", "0.1", "0.2"]);
     }
 
     #[test]

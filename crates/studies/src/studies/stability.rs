@@ -360,10 +360,10 @@ impl Study for Stability {
         figure(
             &ctx.dir,
             STABILITY_MODES,
-            (1200, 560),
-            (1, 2),
+            (1200, 1300),
+            (2, 1),
             &[PanelKind::Xy(pa_panel), PanelKind::Xy(pv_panel)],
-            "Left: cost of the adaptive gap element against the spring stiffness. Right: the paper impulse's violation of the restitution law against modes kept (the consistent impulse keeps it to rounding).",
+            "Top: cost of the adaptive gap element against the spring stiffness. Bottom: the paper impulse's violation of the restitution law against modes kept (the consistent impulse keeps it to rounding).",
         )?;
         tn.write(&ctx.dir, "newmark_grid")?;
         ta.write(&ctx.dir, "adaptive_cost")?;
