@@ -13,9 +13,11 @@ pub mod cost;
 pub mod gap;
 pub mod modes;
 pub mod paper;
+pub mod record_table;
 pub mod restitution;
 pub mod robustness;
 pub mod stability;
+pub mod stats;
 pub mod stiffness;
 
 use std::path::{Path, PathBuf};
@@ -110,6 +112,27 @@ pub fn record_label(path: &str) -> String {
         .unwrap_or_else(|| path.to_string());
     match stem.rsplit_once('_') {
         Some((pre, last)) if pre.starts_with("RSN") => last.to_string(),
+        _ => stem,
+    }
+}
+
+/// Name of a record file in the record-based studies' tables: its stem without the PEER
+/// `RSN<number>_` prefix (`LOMAP_CAP000`, `NORTHR-RRS_032`), unique across the project's
+/// records (unlike [`record_label`], which keeps only the component).
+pub fn record_name(path: &str) -> String {
+    let stem = Path::new(path)
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| path.to_string());
+    match stem.split_once('_') {
+        Some((pre, rest))
+            if pre.len() > 3
+                && pre.starts_with("RSN")
+                && pre[3..].bytes().all(|b| b.is_ascii_digit())
+                && !rest.is_empty() =>
+        {
+            rest.to_string()
+        }
         _ => stem,
     }
 }
@@ -640,4 +663,57 @@ pub fn failures_note(res: &Results) -> Option<String> {
         res.order.len(),
         kinds.join(", ")
     ))
+}
+
+/// The deserialisation default of a study's `record_table` key: the record metadata table,
+/// relative to `studies/`.
+pub fn default_record_table() -> String {
+    "../data/ground-motions/records.csv".into()
+}
+
+/// The records of a record-based study: `--records` if given; else `records` (default: the
+/// four Loma Prieta components when neither key is given) followed by every `*.AT2` in each
+/// of `record_dirs` (relative to `studies/`, sorted by file name), without repeats; the
+/// first one only with `--quick`.
+pub fn study_records(
+    ctx: &Ctx,
+    records: Option<&[String]>,
+    record_dirs: &[String],
+) -> Result<Vec<String>> {
+    if !ctx.opts.records.is_empty() {
+        return Ok(ctx.records(&[], true));
+    }
+    let mut out: Vec<String> = match records {
+        Some(r) => r.to_vec(),
+        None if record_dirs.is_empty() => default_records(),
+        None => Vec::new(),
+    };
+    for dir in record_dirs {
+        let full = ctx.studies_dir.join(dir);
+        let rd = std::fs::read_dir(&full).map_err(|e| StudyError::Read {
+            path: full.display().to_string(),
+            message: e.to_string(),
+        })?;
+        let mut names: Vec<String> = rd
+            .filter_map(|e| e.ok())
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .filter(|n| n.ends_with(".AT2"))
+            .collect();
+        names.sort();
+        out.extend(names.into_iter().map(|n| format!("{dir}/{n}")));
+    }
+    let mut seen = std::collections::BTreeSet::new();
+    out.retain(|r| seen.insert(r.clone()));
+    Ok(ctx.records(&out, false))
+}
+
+/// The pulse class of each record, from the metadata table at `table` (relative to
+/// `studies/`; see [`record_table`]).
+pub fn record_classes(
+    ctx: &Ctx,
+    table: &str,
+    recs: &[String],
+) -> Result<Vec<record_table::PulseClass>> {
+    let t = record_table::RecordTable::load(&ctx.studies_dir.join(table))?;
+    Ok(recs.iter().map(|r| t.class(r)).collect())
 }
