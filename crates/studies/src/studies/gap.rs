@@ -87,7 +87,9 @@ impl Study for Gap {
     fn cases(&self, ctx: &Ctx) -> Result<Vec<CaseSpec>> {
         let d: Def = ctx.def()?;
         let mut v = Vec::new();
-        for rec in study_records(ctx, d.records.as_deref(), &d.record_dirs)? {
+        let recs = study_records(ctx, d.records.as_deref(), &d.record_dirs)?;
+        record_classes(ctx, &d.record_table, &recs)?;
+        for rec in recs {
             for g in gaps(ctx, &d) {
                 v.push(mom(ctx, &d, &rec, g));
                 v.push(gel(ctx, &d, &rec, g));

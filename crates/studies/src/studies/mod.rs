@@ -690,9 +690,10 @@ pub fn study_records(
     };
     for dir in record_dirs {
         let full = ctx.studies_dir.join(dir);
-        let rd = std::fs::read_dir(&full).map_err(|e| StudyError::Read {
-            path: full.display().to_string(),
-            message: e.to_string(),
+        // A folder the definition names that cannot be listed is bad input (exit 2).
+        let rd = std::fs::read_dir(&full).map_err(|e| StudyError::Definition {
+            file: ctx.def_file.clone(),
+            message: format!("record_dirs: cannot list `{dir}` ({}): {e}", full.display()),
         })?;
         let mut names: Vec<String> = rd
             .filter_map(|e| e.ok())
@@ -708,12 +709,21 @@ pub fn study_records(
 }
 
 /// The pulse class of each record, from the metadata table at `table` (relative to
-/// `studies/`; see [`record_table`]).
+/// `studies/`; see [`record_table`]). The studies call it when they build their cases too,
+/// so a bad table is refused before anything runs.
 pub fn record_classes(
     ctx: &Ctx,
     table: &str,
     recs: &[String],
 ) -> Result<Vec<record_table::PulseClass>> {
-    let t = record_table::RecordTable::load(&ctx.studies_dir.join(table))?;
+    let full = ctx.studies_dir.join(table);
+    let t = record_table::RecordTable::load(&full).map_err(|e| match e {
+        // The definition names a table that cannot be read: bad input (exit 2).
+        record_table::RecordTableError::Read { path, message } => StudyError::Definition {
+            file: ctx.def_file.clone(),
+            message: format!("record_table: cannot read `{table}` ({path}): {message}"),
+        },
+        e => e.into(),
+    })?;
     Ok(recs.iter().map(|r| t.class(r)).collect())
 }

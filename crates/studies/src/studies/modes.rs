@@ -63,7 +63,9 @@ impl Study for Modes {
     fn cases(&self, ctx: &Ctx) -> Result<Vec<CaseSpec>> {
         let d: Def = ctx.def()?;
         let mut v = Vec::new();
-        for rec in study_records(ctx, d.records.as_deref(), &d.record_dirs)? {
+        let recs = study_records(ctx, d.records.as_deref(), &d.record_dirs)?;
+        record_classes(ctx, &d.record_table, &recs)?;
+        for rec in recs {
             for var in &d.variants {
                 for n in modes(ctx, &d) {
                     v.push(case(ctx, &d, &rec, var, n));

@@ -78,7 +78,9 @@ impl Study for Restitution {
     fn cases(&self, ctx: &Ctx) -> Result<Vec<CaseSpec>> {
         let d: Def = ctx.def()?;
         let mut v = Vec::new();
-        for rec in study_records(ctx, d.records.as_deref(), &d.record_dirs)? {
+        let recs = study_records(ctx, d.records.as_deref(), &d.record_dirs)?;
+        record_classes(ctx, &d.record_table, &recs)?;
+        for rec in recs {
             for cr in crs(ctx, &d) {
                 v.extend(methods(ctx, &d, &rec, cr).into_iter().map(|m| m.1));
             }

@@ -105,6 +105,7 @@ impl Study for Stiffness {
     fn cases(&self, ctx: &Ctx) -> Result<Vec<CaseSpec>> {
         let d: Def = ctx.def()?;
         let g = grid(ctx, &d)?;
+        record_classes(ctx, &d.record_table, &g.records)?;
         let mut v = Vec::new();
         for rec in &g.records {
             for &cr in &g.crs {
@@ -524,7 +525,7 @@ impl Study for Stiffness {
             (1200, 1000),
             (2, 2),
             &kinds,
-            "Gap element against k, records that pound: solid = median, thin dashed = 16th and 84th percentiles; momentum method (all modes, rigid limit) as horizontal lines. The error panel has no momentum line (its error is 0 by definition).",
+            "Records that pound. Solid: median; thin dashed: 16th/84th percentiles; horizontal: momentum method (rigid limit), not in the error panel (its error is 0).",
         )?;
         figure(
             &ctx.dir,
@@ -532,7 +533,7 @@ impl Study for Stiffness {
             (1200, 500),
             (1, 2),
             &[PanelKind::Xy(rhs_p), PanelKind::Xy(steps_p)],
-            "Work of the adaptive Dormand–Prince integrator against k, every record: solid = median, thin dashed = 16th and 84th percentiles (deterministic counts).",
+            "Adaptive Dormand–Prince work, every record. Solid: median; thin dashed: 16th/84th percentiles (deterministic counts).",
         )?;
         long.write(&ctx.dir, "stiffness_all")?;
         summary.write(&ctx.dir, "stiffness")?;
