@@ -1100,7 +1100,12 @@ fn study_scene_without_a_pair_is_refused() {
         "/../../studies/gap.toml"
     ))
     .unwrap()
-    .replace("scene = \"paper/scene.toml\"", "scene = \"one.toml\"");
+    .replace("scene = \"paper/scene.toml\"", "scene = \"one.toml\"")
+    // The definition's record paths are relative to the repository's studies/ folder.
+    .replace(
+        "\"../data/",
+        concat!("\"", env!("CARGO_MANIFEST_DIR"), "/../../data/"),
+    );
     d.write("gap.toml", &def);
     let out = d.path("results");
     assert_bad(
@@ -1119,6 +1124,73 @@ fn study_scene_without_a_pair_is_refused() {
             "two buildings joined by a contact",
             "1 building(s)",
         ],
+        &[&out],
+    );
+}
+
+/// A `record_dirs` folder that does not exist is bad input: exit 2 naming the key, the
+/// folder and the definition file; nothing is written.
+#[test]
+fn study_record_dir_missing_is_refused() {
+    let d = TempDir::new("study-record-dirs");
+    let def = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../studies/modes.toml"
+    ))
+    .unwrap()
+    .replace(
+        "record_dirs = [\"../data/ground-motions/near-field\"]",
+        "record_dirs = [\"no-such-folder\"]",
+    );
+    assert!(def.contains("no-such-folder"));
+    d.write("modes.toml", &def);
+    let out = d.path("results");
+    assert_bad(
+        &[
+            "studies".into(),
+            "run".into(),
+            "modes".into(),
+            "--quick".into(),
+            "--studies-dir".into(),
+            s(&d.0),
+            "--out".into(),
+            s(&out),
+        ],
+        &[
+            "study `modes`",
+            "modes.toml",
+            "record_dirs",
+            "no-such-folder",
+        ],
+        &[&out],
+    );
+    // A record table that cannot be read: refused the same way, before any case runs.
+    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../../");
+    let def = std::fs::read_to_string(format!("{root}studies/modes.toml"))
+        .unwrap()
+        .replace("\"../data/", &format!("\"{root}data/"))
+        .replace(
+            "paper/scene.toml",
+            &format!("{root}studies/paper/scene.toml"),
+        )
+        .replace(
+            &format!("record_table = \"{root}data/ground-motions/records.csv\""),
+            "record_table = \"missing.csv\"",
+        );
+    assert!(def.contains("missing.csv"));
+    d.write("modes.toml", &def);
+    assert_bad(
+        &[
+            "studies".into(),
+            "run".into(),
+            "modes".into(),
+            "--quick".into(),
+            "--studies-dir".into(),
+            s(&d.0),
+            "--out".into(),
+            s(&out),
+        ],
+        &["study `modes`", "record_table", "missing.csv"],
         &[&out],
     );
 }

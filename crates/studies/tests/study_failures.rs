@@ -151,7 +151,9 @@ fn study_scene_with_contact_elsewhere_is_refused() {
     d.write("three.toml", &scene);
     let def = std::fs::read_to_string(format!("{}/gap.toml", studies_dir()))
         .unwrap()
-        .replace("scene = \"paper/scene.toml\"", "scene = \"three.toml\"");
+        .replace("scene = \"paper/scene.toml\"", "scene = \"three.toml\"")
+        // The definition's record paths are relative to the repository's studies/ folder.
+        .replace("\"../data/", &format!("\"{}/../data/", studies_dir()));
     d.write("gap.toml", &def);
     let out = d.path("out");
     let o = pound(&[

@@ -14,9 +14,11 @@ pub mod gap;
 pub mod modelform;
 pub mod modes;
 pub mod paper;
+pub mod record_table;
 pub mod restitution;
 pub mod robustness;
 pub mod stability;
+pub mod stats;
 pub mod stiffness;
 
 use std::path::{Path, PathBuf};
@@ -112,6 +114,27 @@ pub fn record_label(path: &str) -> String {
         .unwrap_or_else(|| path.to_string());
     match stem.rsplit_once('_') {
         Some((pre, last)) if pre.starts_with("RSN") => last.to_string(),
+        _ => stem,
+    }
+}
+
+/// Name of a record file in the record-based studies' tables: its stem without the PEER
+/// `RSN<number>_` prefix (`LOMAP_CAP000`, `NORTHR-RRS_032`), unique across the project's
+/// records (unlike [`record_label`], which keeps only the component).
+pub fn record_name(path: &str) -> String {
+    let stem = Path::new(path)
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| path.to_string());
+    match stem.split_once('_') {
+        Some((pre, rest))
+            if pre.len() > 3
+                && pre.starts_with("RSN")
+                && pre[3..].bytes().all(|b| b.is_ascii_digit())
+                && !rest.is_empty() =>
+        {
+            rest.to_string()
+        }
         _ => stem,
     }
 }
@@ -643,4 +666,67 @@ pub fn failures_note(res: &Results) -> Option<String> {
         res.order.len(),
         kinds.join(", ")
     ))
+}
+
+/// The deserialisation default of a study's `record_table` key: the record metadata table,
+/// relative to `studies/`.
+pub fn default_record_table() -> String {
+    "../data/ground-motions/records.csv".into()
+}
+
+/// The records of a record-based study: `--records` if given; else `records` (default: the
+/// four Loma Prieta components when neither key is given) followed by every `*.AT2` in each
+/// of `record_dirs` (relative to `studies/`, sorted by file name), without repeats; the
+/// first one only with `--quick`.
+pub fn study_records(
+    ctx: &Ctx,
+    records: Option<&[String]>,
+    record_dirs: &[String],
+) -> Result<Vec<String>> {
+    if !ctx.opts.records.is_empty() {
+        return Ok(ctx.records(&[], true));
+    }
+    let mut out: Vec<String> = match records {
+        Some(r) => r.to_vec(),
+        None if record_dirs.is_empty() => default_records(),
+        None => Vec::new(),
+    };
+    for dir in record_dirs {
+        let full = ctx.studies_dir.join(dir);
+        // A folder the definition names that cannot be listed is bad input (exit 2).
+        let rd = std::fs::read_dir(&full).map_err(|e| StudyError::Definition {
+            file: ctx.def_file.clone(),
+            message: format!("record_dirs: cannot list `{dir}` ({}): {e}", full.display()),
+        })?;
+        let mut names: Vec<String> = rd
+            .filter_map(|e| e.ok())
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .filter(|n| n.ends_with(".AT2"))
+            .collect();
+        names.sort();
+        out.extend(names.into_iter().map(|n| format!("{dir}/{n}")));
+    }
+    let mut seen = std::collections::BTreeSet::new();
+    out.retain(|r| seen.insert(r.clone()));
+    Ok(ctx.records(&out, false))
+}
+
+/// The pulse class of each record, from the metadata table at `table` (relative to
+/// `studies/`; see [`record_table`]). The studies call it when they build their cases too,
+/// so a bad table is refused before anything runs.
+pub fn record_classes(
+    ctx: &Ctx,
+    table: &str,
+    recs: &[String],
+) -> Result<Vec<record_table::PulseClass>> {
+    let full = ctx.studies_dir.join(table);
+    let t = record_table::RecordTable::load(&full).map_err(|e| match e {
+        // The definition names a table that cannot be read: bad input (exit 2).
+        record_table::RecordTableError::Read { path, message } => StudyError::Definition {
+            file: ctx.def_file.clone(),
+            message: format!("record_table: cannot read `{table}` ({path}): {message}"),
+        },
+        e => e.into(),
+    })?;
+    Ok(recs.iter().map(|r| t.class(r)).collect())
 }

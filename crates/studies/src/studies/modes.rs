@@ -1,12 +1,18 @@
 //! Study 3 (`modes`): the momentum method's hidden parameter, the number of modes kept, for
 //! both impulse variants: contact-story amplification, achieved restitution and r_N.
+//!
+//! Statistics over the records that pound in each case (at least one impact): median and
+//! 16th/84th percentiles ([`super::stats`]), the count n in every row; the minimum achieved
+//! restitution over every impact of every record besides.
 
 use serde::Deserialize;
 use solvers::Method;
 
+use super::record_table::PulseClass;
+use super::stats::{median_band, Spread};
 use super::{
-    amp_contact, default_pga, default_records, failures_note, mean, record_label, write_summary,
-    Ctx, Study,
+    amp_contact, default_pga, default_record_table, failures_note, record_classes, record_name,
+    study_records, write_summary, Ctx, Study,
 };
 use crate::plot::{figure, Marker, Panel, PanelKind, Series};
 use crate::sweep::{CaseSpec, Result, Results};
@@ -20,8 +26,15 @@ struct Def {
     scene: String,
     #[serde(default = "default_pga")]
     pga: f64,
-    #[serde(default = "default_records")]
-    records: Vec<String>,
+    /// Record files (relative to `studies/`); default: the four Loma Prieta components
+    /// when `record_dirs` is not given either.
+    records: Option<Vec<String>>,
+    /// Folders whose every `*.AT2` is added (sorted by file name).
+    #[serde(default)]
+    record_dirs: Vec<String>,
+    /// Record metadata (pulse classes), relative to `studies/`.
+    #[serde(default = "default_record_table")]
+    record_table: String,
     gap: f64,
     restitution: f64,
     max_modes: usize,
@@ -50,7 +63,9 @@ impl Study for Modes {
     fn cases(&self, ctx: &Ctx) -> Result<Vec<CaseSpec>> {
         let d: Def = ctx.def()?;
         let mut v = Vec::new();
-        for rec in ctx.records(&d.records, true) {
+        let recs = study_records(ctx, d.records.as_deref(), &d.record_dirs)?;
+        record_classes(ctx, &d.record_table, &recs)?;
+        for rec in recs {
             for var in &d.variants {
                 for n in modes(ctx, &d) {
                     v.push(case(ctx, &d, &rec, var, n));
@@ -62,16 +77,30 @@ impl Study for Modes {
 
     fn report(&self, ctx: &Ctx, res: &Results) -> Result<()> {
         let d: Def = ctx.def()?;
-        let recs = ctx.records(&d.records, true);
+        let recs = study_records(ctx, d.records.as_deref(), &d.record_dirs)?;
+        let classes = record_classes(ctx, &d.record_table, &recs)?;
         let ns = modes(ctx, &d);
         let mut t = Table::new(
-            &format!("Momentum method against modes kept (gap {} cm, c_r = {}); means over {} records, achieved c_r minimum over all", d.gap * 100.0, d.restitution, recs.len()),
-            &["impulse", "modes", "r_N b1", "r_N b2", "amp. contact story b1", "amp. contact story b2", "impacts", "achieved c_r mean", "achieved c_r min"],
+            &format!(
+                "Momentum method against modes kept (gap {} cm, c_r = {}), {} records: median and 16th–84th percentiles over the n records that pound; achieved c_r minimum over every impact of every record",
+                d.gap * 100.0,
+                d.restitution,
+                recs.len()
+            ),
+            &[
+                "impulse", "modes", "r_N b1", "r_N b2", "n", "amp. b1 median", "amp. b1 p16", "amp. b1 p84",
+                "amp. b2 median", "amp. b2 p16", "amp. b2 p84", "impacts median", "achieved c_r median", "achieved c_r min",
+            ],
+        );
+        let mut by_class = Table::new(
+            "Contact-story amplification of building 1 by pulse class (records that pound): median and 16th–84th percentiles",
+            &["impulse", "modes", "records", "n", "amp. b1 median", "amp. b1 p16", "amp. b1 p84", "amp. b2 median"],
         );
         let mut long = Table::new(
             "Every record",
             &[
                 "record",
+                "pulse",
                 "impulse",
                 "modes",
                 "amp. contact story b1",
@@ -82,90 +111,97 @@ impl Study for Modes {
                 "status",
             ],
         );
-        let mut amp_p = Panel {
-            title: "Top-story amplification, building 1".into(),
+        let panel = |title: &str, y: &str| Panel {
+            title: title.into(),
             x_label: "modes kept per building".into(),
-            y_label: "amplification factor".into(),
+            y_label: y.into(),
             legend_right: true,
             ..Default::default()
         };
-        let mut amp2_p = Panel {
-            title: "Top-story amplification, building 2".into(),
-            x_label: "modes kept per building".into(),
-            y_label: "amplification factor".into(),
-            no_legend: true,
-            ..Default::default()
-        };
-        let mut e_p = Panel {
-            title: "Achieved restitution (min over impacts)".into(),
-            x_label: "modes kept per building".into(),
-            y_label: "achieved c_r".into(),
-            legend_right: true,
-            ..Default::default()
-        };
-        let mut r_p = Panel {
-            title: "Contact flexibility kept r_N".into(),
-            x_label: "modes kept per building".into(),
-            y_label: "r_N".into(),
-            legend_right: false,
-            ..Default::default()
-        };
+        let mut amp_p = panel(
+            "Contact-story amplification, building 1",
+            "amplification factor",
+        );
+        let mut amp2_p = panel(
+            "Contact-story amplification, building 2",
+            "amplification factor",
+        );
+        let mut e_p = panel("Achieved restitution (per-record minimum)", "achieved c_r");
+        let mut r_p = panel("Contact flexibility kept r_N", "r_N");
+        r_p.legend_right = false;
         let mut reading = Vec::new();
         for (vi, var) in d.variants.iter().enumerate() {
-            let mut pa = Vec::new();
-            let mut pb = Vec::new();
-            let mut pe = Vec::new();
+            let (mut pa, mut pb, mut pe) = (Vec::new(), Vec::new(), Vec::new());
             let (mut r1, mut r2) = (Vec::new(), Vec::new());
+            let mut emin_all: Option<(f64, usize)> = None;
             for &n in &ns {
                 let cs: Vec<CaseSpec> = recs.iter().map(|r| case(ctx, &d, r, var, n)).collect();
-                let a1 = mean(cs.iter().filter_map(|c| amp_contact(res, c, 0)));
-                let a2 = mean(cs.iter().filter_map(|c| amp_contact(res, c, 1)));
-                let imp = mean(
-                    cs.iter()
-                        .filter_map(|c| res.out(c).map(|o| o.impacts as f64)),
-                );
-                let em = mean(
-                    cs.iter()
-                        .filter_map(|c| res.out(c).and_then(|o| o.restitution_mean)),
-                );
+                let pounds: Vec<usize> = (0..cs.len())
+                    .filter(|&i| res.out(&cs[i]).is_some_and(|o| o.impacts > 0))
+                    .collect();
+                let sp = |idx: &[usize], fun: &dyn Fn(&CaseSpec) -> Option<f64>| {
+                    Spread::of(idx.iter().filter_map(|&i| fun(&cs[i])))
+                };
+                let a1 = sp(&pounds, &|c| amp_contact(res, c, 0));
+                let a2 = sp(&pounds, &|c| amp_contact(res, c, 1));
+                let imp = sp(&pounds, &|c| res.out(c).map(|o| o.impacts as f64));
+                let em = sp(&pounds, &|c| res.out(c).and_then(|o| o.restitution_mean));
+                let emr = sp(&pounds, &|c| res.out(c).and_then(|o| o.restitution_min));
                 let emin = cs
                     .iter()
                     .filter_map(|c| res.out(c).and_then(|o| o.restitution_min))
                     .fold(None, |a: Option<f64>, x| Some(a.map_or(x, |a| a.min(x))));
+                if let Some(e) = emin {
+                    if emin_all.is_none_or(|(m, _)| e < m) {
+                        emin_all = Some((e, n));
+                    }
+                }
                 let rn = cs.iter().find_map(|c| res.out(c).and_then(|o| o.r_n));
-                t.push(vec![
+                let mut row = vec![
                     var.clone(),
                     n.to_string(),
                     f(rn.map(|r| r.0), 4),
                     f(rn.map(|r| r.1), 4),
-                    f(a1, 3),
-                    f(a2, 3),
-                    f(imp, 1),
-                    f(em, 4),
-                    f(emin, 4),
-                ]);
-                if let Some(a) = a1 {
-                    pa.push((n as f64, a));
+                    a1.n.to_string(),
+                ];
+                row.extend(a1.cells(3));
+                row.extend(a2.cells(3));
+                row.extend([f(imp.median, 1), f(em.median, 4), f(emin, 4)]);
+                t.push(row);
+                for c in PulseClass::ALL {
+                    let idx: Vec<usize> = pounds
+                        .iter()
+                        .copied()
+                        .filter(|&i| classes[i] == c)
+                        .collect();
+                    if idx.is_empty() {
+                        continue;
+                    }
+                    let b1 = sp(&idx, &|c| amp_contact(res, c, 0));
+                    let b2 = sp(&idx, &|c| amp_contact(res, c, 1));
+                    let mut row = vec![
+                        var.clone(),
+                        n.to_string(),
+                        c.label().into(),
+                        b1.n.to_string(),
+                    ];
+                    row.extend(b1.cells(3));
+                    row.push(f(b2.median, 3));
+                    by_class.push(row);
                 }
-                if let Some(a) = a2 {
-                    pb.push((n as f64, a));
-                }
-                if let Some(e) = emin {
-                    pe.push((n as f64, e));
-                }
+                pa.push((n as f64, a1));
+                pb.push((n as f64, a2));
+                pe.push((n as f64, emr));
                 if let Some(r) = rn {
                     r1.push((n as f64, r.0));
                     r2.push((n as f64, r.1));
                 }
-                for c in &cs {
+                for (i, c) in cs.iter().enumerate() {
                     let r = res.get(c);
                     let o = r.ok();
                     long.push(vec![
-                        c.params
-                            .get("record")
-                            .and_then(|v| v.as_str())
-                            .unwrap_or("")
-                            .to_string(),
+                        record_name(&recs[i]),
+                        classes[i].label().into(),
                         var.clone(),
                         n.to_string(),
                         f(amp_contact(res, c, 0), 3),
@@ -179,19 +215,10 @@ impl Study for Modes {
                     ]);
                 }
             }
-            let mk = if vi == 0 {
-                Marker::Circle
-            } else {
-                Marker::Triangle
-            };
-            amp_p
-                .series
-                .push(Series::line(&format!("{var} impulse"), pa.clone(), vi).marker(mk));
-            amp2_p
-                .series
-                .push(Series::line(&format!("{var} impulse"), pb.clone(), vi).marker(mk));
-            e_p.series
-                .push(Series::line(&format!("{var} impulse"), pe.clone(), vi).marker(mk));
+            let name = format!("{var} impulse");
+            amp_p.series.extend(median_band(&name, vi, &pa));
+            amp2_p.series.extend(median_band(&name, vi, &pb));
+            e_p.series.extend(median_band(&name, vi, &pe));
             if vi == 0 {
                 r_p.series
                     .push(Series::line("building 1 (roof)", r1.clone(), 2).marker(Marker::Circle));
@@ -204,42 +231,46 @@ impl Study for Modes {
                     f(at(&r1, 5.0), 2), f(at(&r2, 5.0), 2), f(at(&r1, 10.0), 2), f(at(&r2, 10.0), 2)
                 ));
             }
-            let at_n =
-                |v: &Vec<(f64, f64)>, n: usize| v.iter().find(|p| p.0 == n as f64).map(|p| p.1);
+            let at_n = |v: &Vec<(f64, Spread)>, n: usize| {
+                v.iter()
+                    .find(|p| p.0 == n as f64)
+                    .map_or(Spread::of([]), |p| p.1)
+            };
             let (n0, n1) = (ns[0], ns[ns.len() - 1]);
-            let emin_all = pe.iter().map(|p| p.1).fold(f64::INFINITY, f64::min);
-            let restitution = if emin_all >= d.restitution - 1e-9 {
-                format!(
-                    "the achieved restitution stays at the target {} for every mode count",
+            let restitution = match emin_all {
+                Some((e, _)) if e >= d.restitution - 1e-9 => format!(
+                    "the achieved restitution stays at the target {} for every mode count and record",
                     d.restitution
-                )
-            } else {
-                let worst_n = pe
-                    .iter()
-                    .find(|p| p.1 == emin_all)
-                    .map_or(0, |p| p.0 as usize);
-                format!(
-                    "the achieved restitution falls to {} with {worst_n} mode(s) (target {})",
-                    f(Some(emin_all), 3),
+                ),
+                Some((e, worst_n)) => format!(
+                    "the achieved restitution falls to {} (worst impact of any record) with {worst_n} mode(s) (target {})",
+                    f(Some(e), 3),
                     d.restitution
-                )
+                ),
+                None => "no impact has a defined restitution".into(),
             };
             reading.push(format!(
-                "{var} impulse: the contact-story amplification (mean over records) of building 1 goes from {} with {n0} mode(s) to {} with {n1}, of building 2 from {} to {}; with 10 modes {} and {}; {restitution}.",
-                f(at_n(&pa, n0), 2), f(at_n(&pa, n1), 2), f(at_n(&pb, n0), 2), f(at_n(&pb, n1), 2),
-                f(at_n(&pa, 10), 2), f(at_n(&pb, 10), 2)
+                "{var} impulse ({} of {} records pound with {n1} modes): the contact-story amplification of building 1, median (16–84 %), goes from {} with {n0} mode(s) to {} with {n1}, of building 2 from {} to {}; with 10 modes {} and {}; {restitution}.",
+                at_n(&pa, n1).n,
+                recs.len(),
+                at_n(&pa, n0).words(2),
+                at_n(&pa, n1).words(2),
+                at_n(&pb, n0).words(2),
+                at_n(&pb, n1).words(2),
+                at_n(&pa, 10).words(2),
+                at_n(&pb, 10).words(2)
             ));
         }
-        let _ = record_label;
         figure(
             &ctx.dir,
             "modes",
             (1200, 920),
             (2, 2),
             &[PanelKind::Xy(amp_p), PanelKind::Xy(amp2_p), PanelKind::Xy(e_p), PanelKind::Xy(r_p)],
-            "Momentum method against modes kept: consistent impulse (exact restitution, contact too heavy) vs the paper's floor-mass impulse (restitution violated).",
+            "Momentum method against modes kept, records that pound: solid = median, thin dashed = 16th and 84th percentiles.",
         )?;
         t.write(&ctx.dir, "modes")?;
+        by_class.write(&ctx.dir, "modes_pulse")?;
         long.write(&ctx.dir, "modes_all")?;
         if let Some(n) = failures_note(res) {
             reading.push(n);

@@ -1,13 +1,19 @@
 //! Study 4 (`restitution`): amplification against the coefficient of restitution, both
 //! methods (gap element: Kelvin–Voigt), with persistent-contact phases.
+//!
+//! Statistics over the records that pound (the momentum method records at least one impact
+//! at that c_r): median and 16th/84th percentiles ([`super::stats`]), the count n in every
+//! row.
 
 use serde::Deserialize;
 use solvers::Method;
 
+use super::stats::{median_band, Spread};
 use super::{
-    amp_contact, default_pga, default_records, failures_note, mean, write_summary, Ctx, Study,
+    amp_contact, default_pga, default_record_table, failures_note, record_classes, study_records,
+    write_summary, Ctx, Study,
 };
-use crate::plot::{figure, Marker, Panel, PanelKind, Series};
+use crate::plot::{figure, Panel, PanelKind, Series};
 use crate::sweep::{CaseSpec, Result, Results};
 use crate::table::{f, Table};
 
@@ -19,8 +25,15 @@ struct Def {
     scene: String,
     #[serde(default = "default_pga")]
     pga: f64,
-    #[serde(default = "default_records")]
-    records: Vec<String>,
+    /// Record files (relative to `studies/`); default: the four Loma Prieta components
+    /// when `record_dirs` is not given either.
+    records: Option<Vec<String>>,
+    /// Folders whose every `*.AT2` is added (sorted by file name).
+    #[serde(default)]
+    record_dirs: Vec<String>,
+    /// Record metadata (pulse classes), relative to `studies/`.
+    #[serde(default = "default_record_table")]
+    record_table: String,
     gap: f64,
     restitution: Vec<f64>,
     gap_stiffness: Vec<f64>,
@@ -65,7 +78,9 @@ impl Study for Restitution {
     fn cases(&self, ctx: &Ctx) -> Result<Vec<CaseSpec>> {
         let d: Def = ctx.def()?;
         let mut v = Vec::new();
-        for rec in ctx.records(&d.records, true) {
+        let recs = study_records(ctx, d.records.as_deref(), &d.record_dirs)?;
+        record_classes(ctx, &d.record_table, &recs)?;
+        for rec in recs {
             for cr in crs(ctx, &d) {
                 v.extend(methods(ctx, &d, &rec, cr).into_iter().map(|m| m.1));
             }
@@ -75,7 +90,8 @@ impl Study for Restitution {
 
     fn report(&self, ctx: &Ctx, res: &Results) -> Result<()> {
         let d: Def = ctx.def()?;
-        let recs = ctx.records(&d.records, true);
+        let recs = study_records(ctx, d.records.as_deref(), &d.record_dirs)?;
+        let classes = record_classes(ctx, &d.record_table, &recs)?;
         let cs = crs(ctx, &d);
         let labels: Vec<String> = methods(ctx, &d, &recs[0], 1.0)
             .into_iter()
@@ -83,136 +99,165 @@ impl Study for Restitution {
             .collect();
         let mut t = Table::new(
             &format!(
-                "Top-story amplification against c_r (gap {} cm), means over {} records",
+                "Contact-story amplification against c_r (gap {} cm), {} records: median and 16th–84th percentiles over the n records that pound",
                 d.gap * 100.0,
                 recs.len()
             ),
             &[
+                "c_r", "method", "n", "amp. b1 median", "amp. b1 p16", "amp. b1 p84", "amp. b2 median", "amp. b2 p16",
+                "amp. b2 p84", "impacts median", "achieved c_r median", "persistent-contact phases median", "failed",
+            ],
+        );
+        let panel = |title: &str, x: &str, y: &str| Panel {
+            title: title.into(),
+            x_label: x.into(),
+            y_label: y.into(),
+            legend_right: true,
+            ..Default::default()
+        };
+        let xl = "coefficient of restitution c_r";
+        let mut p1 = panel(
+            "Contact-story amplification, building 1",
+            xl,
+            "amplification factor",
+        );
+        let mut p2 = panel(
+            "Contact-story amplification, building 2",
+            xl,
+            "amplification factor",
+        );
+        let mut p3 = panel(
+            "Achieved restitution (mean over impacts)",
+            "target c_r",
+            "achieved c_r",
+        );
+        p3.legend_right = false;
+        let mut p4 = panel(
+            "Persistent-contact phases (momentum)",
+            xl,
+            "phases per analysis",
+        );
+        // Records that pound at each c_r (momentum method).
+        let pounding = |cr: f64| -> Vec<usize> {
+            (0..recs.len())
+                .filter(|&i| {
+                    res.out(&methods(ctx, &d, &recs[i], cr).swap_remove(0).1)
+                        .is_some_and(|o| o.impacts > 0)
+                })
+                .collect()
+        };
+        let amp = |cr: f64, mi: usize, b: usize, idx: &[usize]| {
+            Spread::of(idx.iter().filter_map(|&i| {
+                amp_contact(res, &methods(ctx, &d, &recs[i], cr).swap_remove(mi).1, b)
+            }))
+        };
+        for (mi, lab) in labels.iter().enumerate() {
+            let (mut a, mut b, mut e, mut pc) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+            for &cr in &cs {
+                let idx = pounding(cr);
+                let cases: Vec<CaseSpec> = recs
+                    .iter()
+                    .map(|r| methods(ctx, &d, r, cr).swap_remove(mi).1)
+                    .collect();
+                let sp = |fun: &dyn Fn(&CaseSpec) -> Option<f64>| {
+                    Spread::of(idx.iter().filter_map(|&i| fun(&cases[i])))
+                };
+                let a1 = sp(&|c| amp_contact(res, c, 0));
+                let a2 = sp(&|c| amp_contact(res, c, 1));
+                let imp = sp(&|c| res.out(c).map(|o| o.impacts as f64));
+                let er = sp(&|c| res.out(c).and_then(|o| o.restitution_mean));
+                let per = sp(&|c| res.out(c).map(|o| o.persistent_contacts as f64));
+                let failed = cases.iter().filter(|c| res.get(c).status != "ok").count();
+                let mut row = vec![cr.to_string(), lab.clone(), a1.n.to_string()];
+                row.extend(a1.cells(3));
+                row.extend(a2.cells(3));
+                row.extend([
+                    f(imp.median, 1),
+                    f(er.median, 3),
+                    f(per.median, 1),
+                    failed.to_string(),
+                ]);
+                t.push(row);
+                a.push((cr, a1));
+                b.push((cr, a2));
+                e.push((cr, er));
+                pc.push((cr, per));
+            }
+            p1.series.extend(median_band(lab, mi, &a));
+            p2.series.extend(median_band(lab, mi, &b));
+            p3.series.extend(median_band(lab, mi, &e));
+            if mi == 0 {
+                p4.series.extend(median_band(lab, mi, &pc));
+            }
+        }
+        p3.series
+            .push(Series::line("target", vec![(0.0, 0.0), (1.0, 1.0)], 7).width(1));
+        figure(&ctx.dir, "restitution", (1200, 920), (2, 2), &[PanelKind::Xy(p1), PanelKind::Xy(p2), PanelKind::Xy(p3), PanelKind::Xy(p4)],
+            "Against c_r, records that pound: solid = median, thin dashed = 16th and 84th percentiles; gap element with the Kelvin-Voigt law (force clamped at zero).")?;
+        t.write(&ctx.dir, "restitution")?;
+        let (lo, hi) = (cs[0], cs[cs.len() - 1]);
+        let (ilo, ihi) = (pounding(lo), pounding(hi));
+        let mut reading = vec![format!(
+            "{} of {} records pound at c_r = {lo} and {} at c_r = {hi} (the statistics are over these). With the momentum method the contact-story amplification of building 1, median (16–84 %), is {} at c_r = {lo} and {} at c_r = {hi}; building 2: {} and {}.",
+            ilo.len(),
+            recs.len(),
+            ihi.len(),
+            amp(lo, 0, 0, &ilo).words(2),
+            amp(hi, 0, 0, &ihi).words(2),
+            amp(lo, 0, 1, &ilo).words(2),
+            amp(hi, 0, 1, &ihi).words(2)
+        )];
+        for (mi, lab) in labels.iter().enumerate().skip(1) {
+            reading.push(format!(
+                "{lab}: {} at c_r = {lo}, {} at c_r = {hi} (building 1).",
+                amp(lo, mi, 0, &ilo).words(2),
+                amp(hi, mi, 0, &ihi).words(2)
+            ));
+        }
+        let np = classes
+            .iter()
+            .filter(|c| **c == super::record_table::PulseClass::Pulse)
+            .count();
+        reading.push(format!(
+            "Records: {} ({np} with a velocity pulse; classes in records.csv and restitution_all.csv).",
+            recs.len()
+        ));
+        let mut long = Table::new(
+            "Every record",
+            &[
+                "record",
+                "pulse",
                 "c_r",
                 "method",
                 "amp. contact story b1",
                 "amp. contact story b2",
                 "impacts",
                 "achieved c_r (mean)",
-                "persistent-contact phases",
-                "failed",
+                "status",
             ],
         );
-        let mut p1 = Panel {
-            title: "Top-story amplification, building 1".into(),
-            x_label: "coefficient of restitution c_r".into(),
-            y_label: "amplification factor".into(),
-            legend_right: false,
-            ..Default::default()
-        };
-        let mut p2 = Panel {
-            title: "Top-story amplification, building 2".into(),
-            x_label: "coefficient of restitution c_r".into(),
-            y_label: "amplification factor".into(),
-            no_legend: true,
-            ..Default::default()
-        };
-        let mut p3 = Panel {
-            title: "Achieved restitution (mean over impacts)".into(),
-            x_label: "target c_r".into(),
-            y_label: "achieved c_r".into(),
-            legend_right: false,
-            ..Default::default()
-        };
-        let mut p4 = Panel {
-            title: "Persistent-contact phases (momentum)".into(),
-            x_label: "coefficient of restitution c_r".into(),
-            y_label: "phases per analysis".into(),
-            no_legend: true,
-            ..Default::default()
-        };
-        let mk = [
-            Marker::Circle,
-            Marker::Triangle,
-            Marker::Square,
-            Marker::Cross,
-        ];
-        for (mi, lab) in labels.iter().enumerate() {
-            let (mut a, mut b, mut e, mut pc) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        for (i, r) in recs.iter().enumerate() {
             for &cr in &cs {
-                let cases: Vec<CaseSpec> = recs
-                    .iter()
-                    .map(|r| methods(ctx, &d, r, cr).swap_remove(mi).1)
-                    .collect();
-                let a1 = mean(cases.iter().filter_map(|c| amp_contact(res, c, 0)));
-                let a2 = mean(cases.iter().filter_map(|c| amp_contact(res, c, 1)));
-                let imp = mean(
-                    cases
-                        .iter()
-                        .filter_map(|c| res.out(c).map(|o| o.impacts as f64)),
-                );
-                let er = mean(
-                    cases
-                        .iter()
-                        .filter_map(|c| res.out(c).and_then(|o| o.restitution_mean)),
-                );
-                let per = mean(
-                    cases
-                        .iter()
-                        .filter_map(|c| res.out(c).map(|o| o.persistent_contacts as f64)),
-                );
-                let failed = cases.iter().filter(|c| res.get(c).status != "ok").count();
-                t.push(vec![
-                    cr.to_string(),
-                    lab.clone(),
-                    f(a1, 3),
-                    f(a2, 3),
-                    f(imp, 1),
-                    f(er, 3),
-                    f(per, 1),
-                    failed.to_string(),
-                ]);
-                if let Some(x) = a1 {
-                    a.push((cr, x));
-                }
-                if let Some(x) = a2 {
-                    b.push((cr, x));
-                }
-                if let Some(x) = er {
-                    e.push((cr, x));
-                }
-                if let Some(x) = per {
-                    pc.push((cr, x));
+                for (lab, c) in methods(ctx, &d, r, cr) {
+                    let rr = res.get(&c);
+                    let o = rr.ok();
+                    long.push(vec![
+                        super::record_name(r),
+                        classes[i].label().into(),
+                        cr.to_string(),
+                        lab,
+                        f(amp_contact(res, &c, 0), 3),
+                        f(amp_contact(res, &c, 1), 3),
+                        o.map_or("–".into(), |o| o.impacts.to_string()),
+                        f(o.and_then(|o| o.restitution_mean), 4),
+                        rr.error_kind
+                            .clone()
+                            .map_or(rr.status.clone(), |k| format!("failed: {k}")),
+                    ]);
                 }
             }
-            p1.series.push(Series::line(lab, a, mi).marker(mk[mi % 4]));
-            p2.series.push(Series::line(lab, b, mi).marker(mk[mi % 4]));
-            p3.series.push(Series::line(lab, e, mi).marker(mk[mi % 4]));
-            if mi == 0 {
-                p4.series.push(Series::line(lab, pc, mi).marker(mk[0]));
-            }
         }
-        p3.series.push(
-            Series::line("target", vec![(0.0, 0.0), (1.0, 1.0)], 7)
-                .dashed()
-                .width(1),
-        );
-        figure(&ctx.dir, "restitution", (1200, 920), (2, 2), &[PanelKind::Xy(p1), PanelKind::Xy(p2), PanelKind::Xy(p3), PanelKind::Xy(p4)],
-            "Amplification against the coefficient of restitution; gap element with the Kelvin-Voigt law (force clamped at zero).")?;
-        t.write(&ctx.dir, "restitution")?;
-        let pick =
-            |cr: f64, mi: usize, b: usize| {
-                mean(recs.iter().filter_map(|r| {
-                    amp_contact(res, &methods(ctx, &d, r, cr).swap_remove(mi).1, b)
-                }))
-            };
-        let (lo, hi) = (cs[0], cs[cs.len() - 1]);
-        let mut reading = vec![format!(
-            "With the momentum method the contact-story amplification of building 1 (mean over records) is {} at c_r = {lo} and {} at c_r = {hi}; building 2: {} and {}.",
-            f(pick(lo, 0, 0), 2), f(pick(hi, 0, 0), 2), f(pick(lo, 0, 1), 2), f(pick(hi, 0, 1), 2)
-        )];
-        for (mi, lab) in labels.iter().enumerate().skip(1) {
-            reading.push(format!(
-                "{lab}: {} at c_r = {lo}, {} at c_r = {hi} (building 1).",
-                f(pick(lo, mi, 0), 2),
-                f(pick(hi, mi, 0), 2)
-            ));
-        }
+        long.write(&ctx.dir, "restitution_all")?;
         if let Some(n) = failures_note(res) {
             reading.push(n);
         }
