@@ -424,13 +424,21 @@ fn axis_ticks(
     length: f64,
     em: f64,
     horizontal: bool,
+    integer: bool,
 ) -> (Vec<Tick>, Vec<f64>) {
     let make = |n: usize| {
         if log {
             log_ticks(lo, hi, n)
         } else {
-            let t = linear_ticks(lo, hi, n);
-            let light = if t.len() >= 2 {
+            let mut t = linear_ticks(lo, hi, n);
+            if integer {
+                // Counts: whole numbers only.
+                t.retain(|x| x.0.fract() == 0.0);
+                for x in &mut t {
+                    x.1 = fixed(x.0, 0);
+                }
+            }
+            let light = if t.len() >= 2 && !integer {
                 let h = 0.5 * (t[1].0 - t[0].0);
                 std::iter::once(t[0].0 - h)
                     .chain(t.iter().map(|x| x.0 + h))
@@ -815,6 +823,17 @@ fn layout_panel(
     } else {
         title.len() as f64 * line_h(sz.title) + 0.5 * sz.gap
     };
+    // Axes whose data are all whole numbers (counts: modes, impacts) get whole-number ticks.
+    let (int_x, int_y) = match kind {
+        PanelKind::Xy(p) => {
+            let all = |f: fn(&(f64, f64)) -> f64| {
+                let mut v = p.series.iter().flat_map(|s| s.points.iter()).peekable();
+                v.peek().is_some() && v.all(|q| f(q).fract() == 0.0)
+            };
+            (all(|q| q.0) && p.vlines.is_empty(), all(|q| q.1))
+        }
+        PanelKind::Heat(_) => (false, false),
+    };
     let (legend, xr, yr, grid) = match kind {
         PanelKind::Xy(p) => {
             let l = if shared || p.no_legend {
@@ -874,8 +893,8 @@ fn layout_panel(
     let ticks_for = |plot_w: f64, plot_h: f64| {
         let (xt, xl, yt, yl) = match &grid {
             None => {
-                let (xt, xl) = axis_ticks(xr.0, xr.1, log_x, plot_w, sz.base, true);
-                let (yt, yl) = axis_ticks(yr.0, yr.1, log_y, plot_h, sz.base, false);
+                let (xt, xl) = axis_ticks(xr.0, xr.1, log_x, plot_w, sz.base, true, int_x);
+                let (yt, yl) = axis_ticks(yr.0, yr.1, log_y, plot_h, sz.base, false, int_y);
                 (xt, xl, yt, yl)
             }
             Some((gx, gy, _)) => (
@@ -890,7 +909,15 @@ fn layout_panel(
                 tr(h.value_range.0, h.log_value),
                 tr(h.value_range.1, h.log_value),
             );
-            let (t, _) = axis_ticks(lo.min(hi), lo.max(hi), h.log_value, plot_h, sz.base, false);
+            let (t, _) = axis_ticks(
+                lo.min(hi),
+                lo.max(hi),
+                h.log_value,
+                plot_h,
+                sz.base,
+                false,
+                false,
+            );
             let w = bar_w(&t, !h.value_label.is_empty());
             (t, w)
         });
@@ -1764,6 +1791,17 @@ mod tests {
             .map(|x| x.1)
             .collect();
         assert_eq!(l, ["−0.25", "0", "0.25"]);
+    }
+
+    #[test]
+    fn count_axes_tick_whole_numbers() {
+        let (t, light) = axis_ticks(0.9, 3.1, false, 800.0, 40.0, true, true);
+        let l: Vec<&str> = t.iter().map(|x| x.1.as_str()).collect();
+        assert_eq!(l, ["1", "2", "3"]);
+        assert!(light.is_empty());
+        // Not counts: half steps are fine.
+        let (t, _) = axis_ticks(0.9, 3.1, false, 800.0, 40.0, true, false);
+        assert!(t.iter().any(|x| x.1 == "1.5"));
     }
 
     #[test]
