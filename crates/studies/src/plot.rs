@@ -1,21 +1,27 @@
 //! Figures as PNG and SVG with plotters.
 //!
 //! Text: every string is drawn from the glyph outlines of the committed DejaVu Sans font
-//! (`data/fonts/DejaVuSans.ttf`, see [`text`]): rasterised in the PNG, glyph paths in the SVG
+//! (`data/fonts/DejaVuSans.ttf`, see `plot/text.rs`): rasterised in the PNG, glyph paths in the SVG
 //! (no `<text>` element), so both render the same on any machine and viewer.
 //!
 //! Size: `figure` takes the pixel width from its `size` argument and derives every text and
 //! stroke size from it. The smallest text has an em of 0.035 × the width, so a figure printed
 //! 85 mm wide shows it at 8.5 pt (≥ 8 pt needs ≥ [`MIN_TEXT_FRACTION`] = 0.0332). The height
-//! follows from the layout: titles, axes, legends (below each panel, or one below all panels
-//! when they show the same series) and the caption take what they need and each plot area
-//! keeps the aspect ratio asked for by `size` (clamped to 0.4 … 0.85).
+//! follows from the layout: titles, axis descriptions and captions wrap; legends go below each
+//! panel, or below all panels when the figure has a single legend or its panels repeat
+//! entries; each plot area keeps the aspect ratio asked for by `size` (clamped to 0.4 … 0.85)
+//! and the panels of a row are aligned. A y description that does not fit beside the plot in
+//! two rotated lines is set horizontally above the plot (for every panel of the figure), and
+//! side-by-side panels whose plots would be narrower than 7 em are stacked in one column:
+//! figures grow taller rather than wider.
 //!
-//! Axes: log axes are linear axes in log10 of the data with ticks at whole decades, labelled
-//! 0.001 … 1000 when every tick lies in that range and 10⁻⁶-style otherwise (1-2-5 ticks
-//! when less than two decades are in view); linear axes get 1-2-2.5-5 × 10ⁿ steps, with a
-//! common ×10ⁿ form for very large or small values. Heat maps tick the grid values and have a
-//! colour bar. Files are written atomically (PNG: drawn to a temporary file in the
+//! Axes: log axes are linear axes in log10 of the data, ticked at whole decades (every k-th
+//! when space is short) when three or more fit, else at 1-3-10 or 1-2-5 × 10ⁿ, else at round
+//! steps of the values; labelled 0.001 … 1000 when every tick lies in that range and
+//! 10⁻⁶-style otherwise. Linear axes get 1-2-2.5-5 × 10ⁿ steps (whole numbers only when the
+//! data are whole numbers), with a common ×10ⁿ form for very large or small values. Heat maps
+//! tick the grid values and have a colour bar; their cells carry their value when every label
+//! fits its cell. Files are written atomically (PNG: drawn to a temporary file in the
 //! destination folder, then renamed).
 
 mod text;
@@ -37,7 +43,7 @@ use text::{OutlineText, FONT_DATA};
 static REGISTER: Once = Once::new();
 
 /// Registers the committed font as "sans-serif" (once per process). plotters needs a
-/// registered font to build its text styles; the drawing itself goes through [`text`].
+/// registered font to build its text styles; the drawing itself goes through `plot/text.rs`.
 pub fn register_fonts() {
     REGISTER.call_once(|| {
         let _ = register_font("sans-serif", FontStyle::Normal, FONT_DATA);
