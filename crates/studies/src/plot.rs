@@ -1800,6 +1800,56 @@ mod tests {
     }
 
     #[test]
+    fn degenerate_data_still_draws_both_files() {
+        // A failed heat cell, an empty series, NaN and infinite points, a constant series,
+        // a long unbreakable legend name: both files are written, the SVG without <text>.
+        let dir = std::env::temp_dir().join(format!("pound-plot-{}", std::process::id()));
+        let heat = Heat {
+            title: "h".into(),
+            log_x: true,
+            log_y: true,
+            log_value: true,
+            value_range: (1e-6, 1.0),
+            value_label: "err".into(),
+            cells: vec![
+                (1e-3, 1e8, Some(1e-3)),
+                (2e-3, 1e8, None),
+                (1e-3, 1e9, Some(f64::NAN)),
+            ],
+            ..Default::default()
+        };
+        let xy = Panel {
+            title: "x".into(),
+            x_label: "t (s)".into(),
+            y_label: "u (m)".into(),
+            log_y: true,
+            series: vec![
+                Series::line("empty", vec![], 0),
+                Series::line(
+                    "bad",
+                    vec![(0.0, f64::NAN), (1.0, f64::INFINITY), (2.0, -1.0)],
+                    1,
+                ),
+                Series::line(&"x".repeat(80), vec![(0.0, 2.0), (1.0, 2.0)], 2),
+            ],
+            ..Default::default()
+        };
+        figure(
+            &dir,
+            "t",
+            (600, 400),
+            (1, 2),
+            &[PanelKind::Heat(heat), PanelKind::Xy(xy)],
+            "c",
+        )
+        .unwrap();
+        let svg = std::fs::read_to_string(dir.join("t.svg")).unwrap();
+        assert!(!svg.contains("<text") && svg.contains("aria-label=\"err\""));
+        assert!(dir.join("t.png").is_file());
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
     fn count_axes_tick_whole_numbers() {
         let (t, light) = axis_ticks(0.9, 3.1, false, 800.0, 40.0, true, true);
         let l: Vec<&str> = t.iter().map(|x| x.1.as_str()).collect();
