@@ -1,21 +1,27 @@
 //! Figures as PNG and SVG with plotters.
 //!
 //! Text: every string is drawn from the glyph outlines of the committed DejaVu Sans font
-//! (`data/fonts/DejaVuSans.ttf`, see [`text`]): rasterised in the PNG, glyph paths in the SVG
+//! (`data/fonts/DejaVuSans.ttf`, see `plot/text.rs`): rasterised in the PNG, glyph paths in the SVG
 //! (no `<text>` element), so both render the same on any machine and viewer.
 //!
 //! Size: `figure` takes the pixel width from its `size` argument and derives every text and
 //! stroke size from it. The smallest text has an em of 0.035 × the width, so a figure printed
 //! 85 mm wide shows it at 8.5 pt (≥ 8 pt needs ≥ [`MIN_TEXT_FRACTION`] = 0.0332). The height
-//! follows from the layout: titles, axes, legends (below each panel, or one below all panels
-//! when they show the same series) and the caption take what they need and each plot area
-//! keeps the aspect ratio asked for by `size` (clamped to 0.4 … 0.85).
+//! follows from the layout: titles, axis descriptions and captions wrap; legends go below each
+//! panel, or below all panels when the figure has a single legend or its panels repeat
+//! entries; each plot area keeps the aspect ratio asked for by `size` (clamped to 0.4 … 0.85)
+//! and the panels of a row are aligned. A y description that does not fit beside the plot in
+//! two rotated lines is set horizontally above the plot (for every panel of the figure), and
+//! side-by-side panels whose plots would be narrower than 7 em are stacked in one column:
+//! figures grow taller rather than wider.
 //!
-//! Axes: log axes are linear axes in log10 of the data with ticks at whole decades, labelled
-//! 0.001 … 1000 when every tick lies in that range and 10⁻⁶-style otherwise (1-2-5 ticks
-//! when less than two decades are in view); linear axes get 1-2-2.5-5 × 10ⁿ steps, with a
-//! common ×10ⁿ form for very large or small values. Heat maps tick the grid values and have a
-//! colour bar. Files are written atomically (PNG: drawn to a temporary file in the
+//! Axes: log axes are linear axes in log10 of the data, ticked at whole decades (every k-th
+//! when space is short) when three or more fit, else at 1-3-10 or 1-2-5 × 10ⁿ, else at round
+//! steps of the values; labelled 0.001 … 1000 when every tick lies in that range and
+//! 10⁻⁶-style otherwise. Linear axes get 1-2-2.5-5 × 10ⁿ steps (whole numbers only when the
+//! data are whole numbers), with a common ×10ⁿ form for very large or small values. Heat maps
+//! tick the grid values and have a colour bar; their cells carry their value when every label
+//! fits its cell. Files are written atomically (PNG: drawn to a temporary file in the
 //! destination folder, then renamed).
 
 mod text;
@@ -37,7 +43,7 @@ use text::{OutlineText, FONT_DATA};
 static REGISTER: Once = Once::new();
 
 /// Registers the committed font as "sans-serif" (once per process). plotters needs a
-/// registered font to build its text styles; the drawing itself goes through [`text`].
+/// registered font to build its text styles; the drawing itself goes through `plot/text.rs`.
 pub fn register_fonts() {
     REGISTER.call_once(|| {
         let _ = register_font("sans-serif", FontStyle::Normal, FONT_DATA);
@@ -424,13 +430,21 @@ fn axis_ticks(
     length: f64,
     em: f64,
     horizontal: bool,
+    integer: bool,
 ) -> (Vec<Tick>, Vec<f64>) {
     let make = |n: usize| {
         if log {
             log_ticks(lo, hi, n)
         } else {
-            let t = linear_ticks(lo, hi, n);
-            let light = if t.len() >= 2 {
+            let mut t = linear_ticks(lo, hi, n);
+            if integer {
+                // Counts: whole numbers only.
+                t.retain(|x| x.0.fract() == 0.0);
+                for x in &mut t {
+                    x.1 = fixed(x.0, 0);
+                }
+            }
+            let light = if t.len() >= 2 && !integer {
                 let h = 0.5 * (t[1].0 - t[0].0);
                 std::iter::once(t[0].0 - h)
                     .chain(t.iter().map(|x| x.0 + h))
@@ -815,6 +829,17 @@ fn layout_panel(
     } else {
         title.len() as f64 * line_h(sz.title) + 0.5 * sz.gap
     };
+    // Axes whose data are all whole numbers (counts: modes, impacts) get whole-number ticks.
+    let (int_x, int_y) = match kind {
+        PanelKind::Xy(p) => {
+            let all = |f: fn(&(f64, f64)) -> f64| {
+                let mut v = p.series.iter().flat_map(|s| s.points.iter()).peekable();
+                v.peek().is_some() && v.all(|q| f(q).fract() == 0.0)
+            };
+            (all(|q| q.0) && p.vlines.is_empty(), all(|q| q.1))
+        }
+        PanelKind::Heat(_) => (false, false),
+    };
     let (legend, xr, yr, grid) = match kind {
         PanelKind::Xy(p) => {
             let l = if shared || p.no_legend {
@@ -874,8 +899,8 @@ fn layout_panel(
     let ticks_for = |plot_w: f64, plot_h: f64| {
         let (xt, xl, yt, yl) = match &grid {
             None => {
-                let (xt, xl) = axis_ticks(xr.0, xr.1, log_x, plot_w, sz.base, true);
-                let (yt, yl) = axis_ticks(yr.0, yr.1, log_y, plot_h, sz.base, false);
+                let (xt, xl) = axis_ticks(xr.0, xr.1, log_x, plot_w, sz.base, true, int_x);
+                let (yt, yl) = axis_ticks(yr.0, yr.1, log_y, plot_h, sz.base, false, int_y);
                 (xt, xl, yt, yl)
             }
             Some((gx, gy, _)) => (
@@ -890,7 +915,15 @@ fn layout_panel(
                 tr(h.value_range.0, h.log_value),
                 tr(h.value_range.1, h.log_value),
             );
-            let (t, _) = axis_ticks(lo.min(hi), lo.max(hi), h.log_value, plot_h, sz.base, false);
+            let (t, _) = axis_ticks(
+                lo.min(hi),
+                lo.max(hi),
+                h.log_value,
+                plot_h,
+                sz.base,
+                false,
+                false,
+            );
             let w = bar_w(&t, !h.value_label.is_empty());
             (t, w)
         });
@@ -1764,6 +1797,67 @@ mod tests {
             .map(|x| x.1)
             .collect();
         assert_eq!(l, ["−0.25", "0", "0.25"]);
+    }
+
+    #[test]
+    fn degenerate_data_still_draws_both_files() {
+        // A failed heat cell, an empty series, NaN and infinite points, a constant series,
+        // a long unbreakable legend name: both files are written, the SVG without <text>.
+        let dir = std::env::temp_dir().join(format!("pound-plot-{}", std::process::id()));
+        let heat = Heat {
+            title: "h".into(),
+            log_x: true,
+            log_y: true,
+            log_value: true,
+            value_range: (1e-6, 1.0),
+            value_label: "err".into(),
+            cells: vec![
+                (1e-3, 1e8, Some(1e-3)),
+                (2e-3, 1e8, None),
+                (1e-3, 1e9, Some(f64::NAN)),
+            ],
+            ..Default::default()
+        };
+        let xy = Panel {
+            title: "x".into(),
+            x_label: "t (s)".into(),
+            y_label: "u (m)".into(),
+            log_y: true,
+            series: vec![
+                Series::line("empty", vec![], 0),
+                Series::line(
+                    "bad",
+                    vec![(0.0, f64::NAN), (1.0, f64::INFINITY), (2.0, -1.0)],
+                    1,
+                ),
+                Series::line(&"x".repeat(80), vec![(0.0, 2.0), (1.0, 2.0)], 2),
+            ],
+            ..Default::default()
+        };
+        figure(
+            &dir,
+            "t",
+            (600, 400),
+            (1, 2),
+            &[PanelKind::Heat(heat), PanelKind::Xy(xy)],
+            "c",
+        )
+        .unwrap();
+        let svg = std::fs::read_to_string(dir.join("t.svg")).unwrap();
+        assert!(!svg.contains("<text") && svg.contains("aria-label=\"err\""));
+        assert!(dir.join("t.png").is_file());
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn count_axes_tick_whole_numbers() {
+        let (t, light) = axis_ticks(0.9, 3.1, false, 800.0, 40.0, true, true);
+        let l: Vec<&str> = t.iter().map(|x| x.1.as_str()).collect();
+        assert_eq!(l, ["1", "2", "3"]);
+        assert!(light.is_empty());
+        // Not counts: half steps are fine.
+        let (t, _) = axis_ticks(0.9, 3.1, false, 800.0, 40.0, true, false);
+        assert!(t.iter().any(|x| x.1 == "1.5"));
     }
 
     #[test]

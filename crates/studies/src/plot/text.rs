@@ -147,7 +147,7 @@ impl Placement {
     }
 }
 
-/// One string drawn on an SVG, replaced by outlines in [`OutlineText::finish_svg`].
+/// One string drawn on an SVG, replaced by outlines in [`finish_svg`].
 struct Item {
     text: String,
     em: f64,
