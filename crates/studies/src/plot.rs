@@ -1094,26 +1094,38 @@ fn layout(
         let idx: Vec<usize> = (r * cols..((r + 1) * cols).min(panels.len())).collect();
         let max =
             |f: &dyn Fn(&PanelLayout) -> f64| idx.iter().map(|&i| f(&first[i])).fold(0.0, f64::max);
-        let title_h = max(&|l| l.title_h);
         let plot_h = max(&|l| l.plot_h).ceil();
         let x_area = max(&|l| l.x_area);
         let legend = max(&|l| l.legend.height(&sz));
         let top = max(&|l| l.top);
+        // The final layouts at the row's plot height: a y description can move above the
+        // plot (adding lines to the title block) only now, so the row's title height is
+        // taken from these, not from the first pass.
+        let mut row: Vec<PanelLayout> = idx
+            .iter()
+            .map(|&i| {
+                layout_panel(
+                    &panels[i],
+                    is_shared,
+                    pw,
+                    Some(plot_h),
+                    aspect,
+                    y_above,
+                    &sz,
+                )
+            })
+            .collect();
+        let title_h = row
+            .iter()
+            .map(|l| l.title_h)
+            .chain(idx.iter().map(|&i| first[i].title_h))
+            .fold(0.0, f64::max);
         rows_h.push((title_h + top + plot_h + x_area + legend).ceil());
-        for &i in &idx {
-            let mut l = layout_panel(
-                &panels[i],
-                is_shared,
-                pw,
-                Some(plot_h),
-                aspect,
-                y_above,
-                &sz,
-            );
+        for l in &mut row {
             l.title_h = title_h;
             l.x_area = x_area;
-            panels_l.push(l);
         }
+        panels_l.extend(row);
     }
     let shared = Legend::new(shared, &sz, sz.w - 2.0 * sz.gap);
     let caption = wrap(caption, sz.base, sz.w - 2.0 * sz.gap);
