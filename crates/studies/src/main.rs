@@ -528,13 +528,27 @@ fn studies_command(command: StudiesCommand) -> Result<()> {
             }
             let total = t0.elapsed().as_secs_f64();
             if shard.is_none() {
-                let doc = serde_json::json!({
-                    "studies": timings,
-                    "total_wall_seconds": total,
-                    "threads": threads.unwrap_or_else(rayon::current_num_threads),
-                    "quick": quick,
-                });
-                io::write_json(&out.join("timing.json"), &doc)?;
+                // One entry per study, kept across runs: a run of some studies (e.g.
+                // `make robustness` after `make studies`) replaces only their entries. The
+                // run's own total and settings are stored with each entry.
+                let path = out.join("timing.json");
+                let mut all: serde_json::Map<String, serde_json::Value> =
+                    std::fs::read_to_string(&path)
+                        .ok()
+                        .and_then(|s| serde_json::from_str::<serde_json::Value>(&s).ok())
+                        .and_then(|v| v.get("studies").and_then(|s| s.as_object()).cloned())
+                        .unwrap_or_default();
+                let threads = threads.unwrap_or_else(rayon::current_num_threads);
+                for (name, mut entry) in timings {
+                    if let Some(e) = entry.as_object_mut() {
+                        e.insert("run_total_wall_seconds".into(), total.into());
+                        e.insert("threads".into(), threads.into());
+                        e.insert("quick".into(), quick.into());
+                    }
+                    all.insert(name, entry);
+                }
+                let doc = serde_json::json!({ "studies": all });
+                io::write_json(&path, &doc)?;
             }
             eprintln!("total wall time {total:.1} s");
             failed_cases(&unexpected)?;

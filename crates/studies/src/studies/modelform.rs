@@ -366,26 +366,38 @@ impl Study for ModelForm {
         // --- Amplification table.
         let mut amp = Table::new(
             &format!(
-                "Top-story and largest story amplification per variant (record {head_label}; medians over {n_rec} record(s)); s_req = peak u1 − u2 at the roof without contact"
+                "Top-story and largest story amplification per variant (record {head_label}; medians over the n of {n_rec} record(s) that pound in that case, momentum method); s_req = peak u1 − u2 at the roof without contact"
             ),
             &[
                 "variant", "gap (m)", "c_r", "s_req (m)", "gap / s_req",
                 "top b1 momentum", "top b2 momentum", "top b1 gap el.", "top b2 gap el.",
                 "max b1 momentum", "max b2 momentum", "max b1 gap el.", "max b2 gap el.",
-                "median top b1 momentum", "median top b2 momentum", "median top b1 gap el.", "median top b2 gap el.",
+                "n", "median top b1 momentum", "median top b2 momentum", "median top b1 gap el.", "median top b2 gap el.",
                 "impacts momentum", "impacts gap el.",
             ],
         );
         let med = |vals: Vec<Option<f64>>| median(vals.into_iter().flatten().collect());
+        // Records on which the momentum method (all modes) has at least one impact: the
+        // statistics over records are taken over these only (a record that never pounds has
+        // amplification 1 and would dilute them).
+        let pounding_records = |v: &Variant, gap: f64, cr: f64| -> Vec<&String> {
+            g.records
+                .iter()
+                .filter(|rec| {
+                    res.out(&c(v, rec, gap, cr, Run::Rigid))
+                        .is_some_and(|o| o.impacts > 0)
+                })
+                .collect()
+        };
         for v in &d.variants {
             for &gap in &d.gaps {
                 for &cr in &g.crs {
                     let r = c(v, head, gap, cr, Run::Rigid);
                     let k = c(v, head, gap, cr, Run::Check);
                     let sr = s_req(&r);
+                    let pounding = pounding_records(v, gap, cr);
                     let over = |b: usize, run: Run| {
-                        med(g
-                            .records
+                        med(pounding
                             .iter()
                             .map(|rec| top(&c(v, rec, gap, cr, run), b))
                             .collect())
@@ -404,6 +416,7 @@ impl Study for ModelForm {
                         f(maxs(&r, 1), 2),
                         f(maxs(&k, 0), 2),
                         f(maxs(&k, 1), 2),
+                        pounding.len().to_string(),
                         f(over(0, Run::Rigid), 2),
                         f(over(1, Run::Rigid), 2),
                         f(over(0, Run::Check), 2),
@@ -487,7 +500,7 @@ impl Study for ModelForm {
         };
         let mut survive = Table::new(
             &format!(
-                "Which conclusions survive (c_r = 1, record {head_label}; verdicts and values building 1 / building 2; last column: records where each holds (for both buildings), of {n_rec})"
+                "Which conclusions survive (c_r = 1, record {head_label}; verdicts and values building 1 / building 2; last column: of the records that pound (momentum method), on how many each holds for both buildings)"
             ),
             &[
                 "variant",
@@ -507,14 +520,14 @@ impl Study for ModelForm {
         for v in &d.variants {
             for &gap in &d.gaps {
                 let h = concl(v, head, gap);
+                let pounding = pounding_records(v, gap, 1.0);
                 let counts: Vec<String> = (0..4)
                     .map(|i| {
-                        let n = g
-                            .records
+                        let n = pounding
                             .iter()
                             .filter(|rec| concl(v, rec, gap)[i].0 == Some(true))
                             .count();
-                        format!("{n}/{n_rec}")
+                        format!("{n}/{}", pounding.len())
                     })
                     .collect();
                 let mut row = vec![v.name.clone(), format!("{gap}")];
@@ -529,8 +542,7 @@ impl Study for ModelForm {
         let calib = &d.variants[0];
         let t = |v: &Variant, b: usize| top(&c(v, head, gap0, 1.0, Run::Rigid), b);
         let tm = |v: &Variant, b: usize| {
-            med(g
-                .records
+            med(pounding_records(v, gap0, 1.0)
                 .iter()
                 .map(|rec| top(&c(v, rec, gap0, 1.0, Run::Rigid), b))
                 .collect())
@@ -538,16 +550,17 @@ impl Study for ModelForm {
         let mut parts = Vec::new();
         for v in &d.variants {
             parts.push(format!(
-                "{} {} / {} (median {} / {})",
+                "{} {} / {} (median {} / {}, n = {})",
                 v.name,
                 f(t(v, 0), 2),
                 f(t(v, 1), 2),
                 f(tm(v, 0), 2),
-                f(tm(v, 1), 2)
+                f(tm(v, 1), 2),
+                pounding_records(v, gap0, 1.0).len()
             ));
         }
         reading.push(format!(
-            "Top-story amplification of buildings 1 / 2 with the momentum method (all modes), record {head_label} (median over {n_rec} record(s)), gap {gap0} m, c_r = 1: {}.",
+            "Top-story amplification of buildings 1 / 2 with the momentum method (all modes), record {head_label} (median over the n of {n_rec} record(s) that pound), gap {gap0} m, c_r = 1: {}.",
             parts.join("; ")
         ));
         if let (Some(a), Some(b)) = (t(calib, 0), t(calib, 1)) {
