@@ -7,13 +7,7 @@
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use structure::testing::paper_scene_path;
-use structure::Scene;
-
-fn paper(overrides: &[&str]) -> Scene {
-    let o: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
-    Scene::from_file_with_overrides(&paper_scene_path(), &o).expect("paper scene")
-}
+use structure::testing::paper_scene as paper;
 
 fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("gap/paper_scene");

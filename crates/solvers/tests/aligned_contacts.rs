@@ -9,23 +9,7 @@
 //! shaking of CAP000), at 10 and 5 cm.
 
 use solvers::{gap, momentum, RunOutput};
-use structure::testing::paper_scene_path;
-use structure::Scene;
-
-fn paper_aligned(overrides: &[&str]) -> Scene {
-    let text = std::fs::read_to_string(paper_scene_path())
-        .unwrap()
-        .replace("left_floor = 15\n", "floors = \"aligned\"\n")
-        .replace("right_floor = 15\n", "");
-    let o: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
-    Scene::from_str_with_overrides(
-        &text,
-        "aligned.toml",
-        paper_scene_path().parent().unwrap(),
-        &o,
-    )
-    .expect("aligned paper scene")
-}
+use structure::testing::paper_scene_aligned as paper_aligned;
 
 /// Largest difference of all peak story shears and floor displacements, relative to the
 /// largest of each kind in the reference.

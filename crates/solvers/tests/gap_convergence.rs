@@ -3,13 +3,7 @@
 
 use solvers::{gap, History, RunOutput};
 use structure::scene::{ContactLaw, Integrator};
-use structure::testing::paper_scene_path;
-use structure::Scene;
-
-fn paper(overrides: &[&str]) -> Scene {
-    let o: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
-    Scene::from_file_with_overrides(&paper_scene_path(), &o).expect("paper scene")
-}
+use structure::testing::paper_scene as paper;
 
 /// Largest relative story-shear difference over all stories of all buildings.
 fn shear_error(a: &RunOutput, reference: &RunOutput) -> f64 {

@@ -1,13 +1,8 @@
 //! Energy audit of the gap element and its guards.
 
 use solvers::{gap, History, SolverError};
-use structure::testing::{paper_scene_path, two_oscillators};
-use structure::Scene;
-
-fn paper(overrides: &[&str]) -> Scene {
-    let o: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
-    Scene::from_file_with_overrides(&paper_scene_path(), &o).expect("paper scene")
-}
+use structure::testing::paper_scene as paper;
+use structure::testing::two_oscillators;
 
 #[test]
 fn energy_balance_closes_on_a_damped_scene_with_ground_motion_and_impacts() {

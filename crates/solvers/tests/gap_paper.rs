@@ -2,13 +2,7 @@
 //! whole stiffness range, both gaps, and the energy audit on it.
 
 use solvers::gap;
-use structure::testing::paper_scene_path;
-use structure::Scene;
-
-fn paper(overrides: &[&str]) -> Scene {
-    let o: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
-    Scene::from_file_with_overrides(&paper_scene_path(), &o).expect("paper scene")
-}
+use structure::testing::paper_scene as paper;
 
 #[test]
 fn paper_scene_runs_for_gaps_10_and_5_cm_and_k_1e7_to_1e13() {

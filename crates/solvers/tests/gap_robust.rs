@@ -4,13 +4,9 @@
 
 use solvers::gap::solve;
 use solvers::{RunOutput, SolverError};
+use structure::testing::paper_scene as paper;
 use structure::testing::paper_scene_path;
 use structure::Scene;
-
-fn paper(overrides: &[&str]) -> Scene {
-    let o: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
-    Scene::from_file_with_overrides(&paper_scene_path(), &o).expect("paper scene")
-}
 
 /// The paper scene with `base` overrides on near-field record `rec`, gap (m) and c_r.
 fn near_field(base: &[&str], rec: &str, gap: &str, cr: &str) -> Scene {

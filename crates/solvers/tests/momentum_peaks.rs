@@ -3,30 +3,7 @@
 //! exact between events and its peaks are continuous maxima, not samples.
 
 use solvers::momentum::solve;
-use structure::ground::GroundMotion;
-use structure::testing::paper_scene_path;
-use structure::Scene;
-
-fn paper(overrides: &[&str]) -> Scene {
-    let o: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
-    Scene::from_file_with_overrides(&paper_scene_path(), &o).expect("paper scene")
-}
-
-/// The same piecewise-linear record on a grid `k` times finer.
-fn refined(g: &GroundMotion, k: usize) -> GroundMotion {
-    let mut accel = Vec::with_capacity((g.accel.len() - 1) * k + 1);
-    for w in g.accel.windows(2) {
-        for i in 0..k {
-            accel.push(w[0] + (w[1] - w[0]) * i as f64 / k as f64);
-        }
-    }
-    accel.push(*g.accel.last().unwrap());
-    GroundMotion {
-        name: format!("{} x{k}", g.name),
-        dt: g.dt / k as f64,
-        accel,
-    }
-}
+use structure::testing::{paper_scene as paper, refined};
 
 /// Largest relative difference of all peak story shears and floor displacements.
 fn peak_difference(a: &solvers::RunOutput, b: &solvers::RunOutput) -> f64 {

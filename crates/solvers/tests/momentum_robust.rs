@@ -5,13 +5,8 @@
 use solvers::momentum::{solve, Problem, Stepper};
 use solvers::{RunOutput, SolverError};
 use structure::ground::GroundMotion;
-use structure::testing::{paper_scene_path, two_oscillators};
-use structure::Scene;
-
-fn paper(overrides: &[&str]) -> Scene {
-    let o: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
-    Scene::from_file_with_overrides(&paper_scene_path(), &o).expect("paper scene")
-}
+use structure::testing::paper_scene as paper;
+use structure::testing::two_oscillators;
 
 /// Every impact approaches, every restitution is in [0, 1] or null with a reason, and the
 /// energy balance closes to round-off of the input.

@@ -10,45 +10,7 @@
 //! - with `floors = "aligned"` every facing pair has a contact: nothing to audit.
 
 use solvers::{gap, momentum, History, Overlap, RunOutput};
-use structure::ground::GroundMotion;
-use structure::testing::paper_scene_path;
-use structure::Scene;
-
-fn paper(overrides: &[&str]) -> Scene {
-    let o: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
-    Scene::from_file_with_overrides(&paper_scene_path(), &o).expect("paper scene")
-}
-
-fn paper_aligned(overrides: &[&str]) -> Scene {
-    let text = std::fs::read_to_string(paper_scene_path())
-        .unwrap()
-        .replace("left_floor = 15\n", "floors = \"aligned\"\n")
-        .replace("right_floor = 15\n", "");
-    let o: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
-    Scene::from_str_with_overrides(
-        &text,
-        "aligned.toml",
-        paper_scene_path().parent().unwrap(),
-        &o,
-    )
-    .expect("aligned paper scene")
-}
-
-/// The same piecewise-linear record on a grid `k` times finer.
-fn refined(g: &GroundMotion, k: usize) -> GroundMotion {
-    let mut accel = Vec::with_capacity((g.accel.len() - 1) * k + 1);
-    for w in g.accel.windows(2) {
-        for i in 0..k {
-            accel.push(w[0] + (w[1] - w[0]) * i as f64 / k as f64);
-        }
-    }
-    accel.push(*g.accel.last().unwrap());
-    GroundMotion {
-        name: format!("{} x{k}", g.name),
-        dt: g.dt / k as f64,
-        accel,
-    }
-}
+use structure::testing::{paper_scene as paper, paper_scene_aligned as paper_aligned, refined};
 
 fn floor_pairs(o: &[Overlap]) -> Vec<(usize, usize)> {
     o.iter().map(|o| (o.left_floor, o.right_floor)).collect()

@@ -2,6 +2,7 @@
 
 use std::path::PathBuf;
 
+use crate::ground::GroundMotion;
 use crate::model::Building;
 use crate::scene::{Contact, GapElementOptions, Limits, MomentumOptions, Scene};
 
@@ -53,4 +54,35 @@ pub fn two_oscillators(
 /// Path of the paper scene shipped in `studies/paper/scene.toml`.
 pub fn paper_scene_path() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../studies/paper/scene.toml")
+}
+
+/// The paper scene (roof-only contact) with `--set`-style overrides.
+pub fn paper_scene(overrides: &[&str]) -> Scene {
+    let o: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+    Scene::from_file_with_overrides(&paper_scene_path(), &o).expect("paper scene")
+}
+
+/// The paper pair with contact at every facing floor (`studies/paper/scene-aligned.toml`,
+/// `floors = "aligned"`) with `--set`-style overrides.
+pub fn paper_scene_aligned(overrides: &[&str]) -> Scene {
+    let o: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+    let path = paper_scene_path().with_file_name("scene-aligned.toml");
+    Scene::from_file_with_overrides(&path, &o).expect("aligned paper scene")
+}
+
+/// The same piecewise-linear record on a grid `k` times finer (linear interpolation between
+/// the record's points, so an exact solver must not change its answer).
+pub fn refined(g: &GroundMotion, k: usize) -> GroundMotion {
+    let mut accel = Vec::with_capacity((g.accel.len() - 1) * k + 1);
+    for w in g.accel.windows(2) {
+        for i in 0..k {
+            accel.push(w[0] + (w[1] - w[0]) * i as f64 / k as f64);
+        }
+    }
+    accel.push(*g.accel.last().unwrap_or(&0.0));
+    GroundMotion {
+        name: format!("{} x{k}", g.name),
+        dt: g.dt / k as f64,
+        accel,
+    }
 }
