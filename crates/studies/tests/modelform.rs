@@ -2,34 +2,12 @@
 //! of `--all`, writes its tables and figures, and its tables agree with the case files.
 
 mod common;
-use common::{pound, TempDir};
-
-fn read_csv(path: &std::path::Path) -> Vec<Vec<String>> {
-    let mut r = csv::Reader::from_path(path).unwrap();
-    let mut rows = vec![r.headers().unwrap().iter().map(String::from).collect()];
-    for rec in r.records() {
-        rows.push(rec.unwrap().iter().map(String::from).collect());
-    }
-    rows
-}
+use common::{pound, quick_study, read_csv, TempDir};
 
 #[test]
 fn quick_modelform_study_runs_and_its_tables_follow_the_cases() {
     let d = TempDir::new("modelform");
-    let out = d.path("results");
-    let studies = concat!(env!("CARGO_MANIFEST_DIR"), "/../../studies");
-    let o = pound(&[
-        "studies",
-        "run",
-        "modelform",
-        "--quick",
-        "--studies-dir",
-        studies,
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let dir = out.join("modelform");
+    let dir = quick_study(&d, "modelform");
     for f in [
         "modelform.csv",
         "modelform_conclusions.csv",

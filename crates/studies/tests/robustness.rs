@@ -2,34 +2,12 @@
 //! form: it runs, is not part of `--all`, and its counts agree with the case files.
 
 mod common;
-use common::{pound, TempDir};
-
-fn read_csv(path: &std::path::Path) -> Vec<Vec<String>> {
-    let mut r = csv::Reader::from_path(path).unwrap();
-    let mut rows = vec![r.headers().unwrap().iter().map(String::from).collect()];
-    for rec in r.records() {
-        rows.push(rec.unwrap().iter().map(String::from).collect());
-    }
-    rows
-}
+use common::{pound, quick_study, read_csv, TempDir};
 
 #[test]
 fn quick_robustness_sweep_counts_agree_with_the_cases() {
     let d = TempDir::new("robustness");
-    let out = d.path("results");
-    let studies = concat!(env!("CARGO_MANIFEST_DIR"), "/../../studies");
-    let o = pound(&[
-        "studies",
-        "run",
-        "robustness",
-        "--quick",
-        "--studies-dir",
-        studies,
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let dir = out.join("robustness");
+    let dir = quick_study(&d, "robustness");
     for f in [
         "robustness.csv",
         "robustness.md",

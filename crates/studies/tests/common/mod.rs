@@ -50,3 +50,34 @@ impl Drop for TempDir {
         let _ = std::fs::remove_dir_all(&self.0);
     }
 }
+
+/// The repository's `studies/` folder.
+pub const STUDIES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../studies");
+
+/// Runs `pound studies run <study> --quick` into `<d>/results`, asserts success and returns
+/// the study's output folder.
+pub fn quick_study(d: &TempDir, study: &str) -> PathBuf {
+    let out = d.path("results");
+    let o = pound(&[
+        "studies",
+        "run",
+        study,
+        "--quick",
+        "--studies-dir",
+        STUDIES,
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    out.join(study)
+}
+
+/// A CSV file as rows of strings, header first.
+pub fn read_csv(path: &std::path::Path) -> Vec<Vec<String>> {
+    let mut r = csv::Reader::from_path(path).unwrap();
+    let mut rows = vec![r.headers().unwrap().iter().map(String::from).collect()];
+    for rec in r.records() {
+        rows.push(rec.unwrap().iter().map(String::from).collect());
+    }
+    rows
+}
