@@ -907,7 +907,12 @@ pub fn write_cases_table(study_dir: &Path, results: &Results) -> Result<()> {
             s.id.clone(),
             s.method.to_string(),
             param(r, "variant"),
-            param(r, "record"),
+            // A unique name per record file (the case parameter `record` keeps only the
+            // component for PEER files, which repeats across the near-field records).
+            s.record
+                .as_deref()
+                .map(crate::studies::record_name)
+                .unwrap_or_else(|| param(r, "record")),
             s.record.clone().unwrap_or_default(),
             s.pga.map(|p| p.to_string()).unwrap_or_default(),
         ];

@@ -278,6 +278,39 @@ fn quick_run_artefacts_are_legible_linked_and_tidy() {
     }
 }
 
+/// In the committed data tables a record has one name: as many distinct `record` values as
+/// distinct `record_file` values (the component alone, e.g. "032", repeats across records).
+#[test]
+fn committed_cases_name_each_record_once() {
+    let results = repo().join("results");
+    let mut checked = 0;
+    for c in find(&results, &|n| n == "cases.csv") {
+        let mut r = csv::Reader::from_path(&c).unwrap();
+        let h = r.headers().unwrap().clone();
+        let (Some(ir), Some(ifile)) = (
+            h.iter().position(|x| x == "record"),
+            h.iter().position(|x| x == "record_file"),
+        ) else {
+            panic!("{}: no record / record_file columns", c.display())
+        };
+        let mut pairs = BTreeSet::new();
+        for row in r.records() {
+            let row = row.unwrap();
+            pairs.insert((row[ir].to_string(), row[ifile].to_string()));
+        }
+        let names: BTreeSet<_> = pairs.iter().map(|p| &p.0).collect();
+        let files: BTreeSet<_> = pairs.iter().map(|p| &p.1).collect();
+        assert_eq!(
+            names.len(),
+            files.len(),
+            "{}: record names are ambiguous",
+            c.display()
+        );
+        checked += 1;
+    }
+    assert!(checked >= 8, "{checked} cases.csv checked");
+}
+
 #[test]
 fn committed_summaries_link_existing_images() {
     let results = repo().join("results");

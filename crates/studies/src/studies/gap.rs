@@ -409,7 +409,7 @@ impl Study for Gap {
             (1200, 470 * rows as u32),
             (rows, 2),
             &panels.into_iter().map(PanelKind::Xy).collect::<Vec<_>>(),
-            &format!("Contact-story amplification against the gap (c_r = 1, {kname}), records that pound: solid = median, thin dashed = 16th and 84th percentiles (drawn where at least {MIN_N} records pound)."),
+            &format!("Contact-story amplification against the gap, c_r = 1, {kname}; records that pound: solid = median, thin dashed = 16th and 84th percentiles (drawn where at least {MIN_N} records pound)."),
         )?;
         table.write(&ctx.dir, "gap")?;
         summary.write(&ctx.dir, "gap_summary")?;
