@@ -481,7 +481,7 @@ fn opensees_agrees_with_pound_newmark() {
             "linear",
             vec![
                 "buildings.0.initial_velocity=[0.1, 0.2, 0.3]",
-                "buildings.1.initial_displacement=[0.01, -0.02]",
+                "buildings.1.initial_displacement=[-0.01, 0.02]",
             ],
         ),
     ] {
