@@ -269,3 +269,43 @@ fn newmark_against_a_wall_matches_the_closed_form_episode() {
         "{first:?}"
     );
 }
+
+#[test]
+fn momentum_holds_a_floor_against_the_wall_until_the_force_turns_tensile() {
+    // c_r = 0 under a ground acceleration a_g = −6 m/s² (the floor pushed toward the wall)
+    // for 0.3 s, ramping to 0 at 0.4 s. Free motion u = (A/ω²)(1 − cos ωt), A = 6 m/s²,
+    // reaches g = 0.01 m at cos ωt₁ = 1 − gω²/A = 1/3 (ω = 20 rad/s). The plastic impact
+    // stops the floor at u = g; the wall then holds it with λ = m(−a_g) − K g ≥ 0 until
+    // −a_g falls to ω² g = 4 m/s²: on the ramp −a_g = 60 (0.4 − t), at t = 0.4 − 1/15 s.
+    let dt = 0.01;
+    let accel: Vec<f64> = (0..=40)
+        .map(|i| if i <= 30 { -6.0 } else { -6.0 * (40 - i) as f64 / 10.0 })
+        .collect();
+    let b = Building::new("stick", vec![M], vec![K], 0.0);
+    let mut scene = free_scene(vec![b], vec![wall_contact(0, GAP, 0.0)], 0.6);
+    scene.ground = Some(GroundMotion::new("push", dt, accel).unwrap());
+    let out = momentum::solve(&scene, None).unwrap();
+    let w = (K / M).sqrt();
+    let t1 = (1.0f64 / 3.0).acos() / w;
+    let first = &out.impacts[0];
+    assert!((first.time - t1).abs() < 1e-10, "{first:?} vs t₁ = {t1}");
+    assert!(first.relative_velocity_after.abs() < 1e-12, "{first:?}");
+    let held = &out.persistent_contacts;
+    assert_eq!(held.len(), 1, "{held:?}");
+    let release = 0.4 - 1.0 / 15.0;
+    // The stopped floor re-touches at once (δ within round-off of 0, pushed in at
+    // A − ω²g = 2 m/s²): the held phase starts microseconds after the impact (3.2e-6 s).
+    assert!(
+        held[0].start >= t1 && held[0].start - t1 < 1e-5,
+        "{held:?}"
+    );
+    assert!((held[0].end - release).abs() < 1e-9, "{held:?} vs {release}");
+    assert_eq!(held[0].released_by, "tension");
+    // Held at δ = 0: the peak displacement is the wall's position, within the stepper's
+    // round-off band of a gap (1e-9 · max(gap, 1 mm)) plus the last bits of the sum.
+    let umax = out.buildings[0].floor_displacement_max[0];
+    assert!(
+        (umax - GAP).abs() <= 1e-9 * GAP * (1.0 + 1e-6),
+        "peak {umax}"
+    );
+}
