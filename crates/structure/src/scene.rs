@@ -1047,6 +1047,14 @@ fn validate(raw: RawScene, origin: &str, base_dir: &Path) -> Result<Scene, Scene
                 ),
             ));
         }
+        // The right side in messages: a floor, or the wall.
+        let right_side = |dof: usize| {
+            if wall {
+                "the wall".to_string()
+            } else {
+                format!("floor {} of `{}`", dof + 1, buildings[right].name)
+            }
+        };
         for (left_dof, right_dof) in pairs {
             // The same floor pair twice (in either orientation) makes the contact system
             // singular: refuse it here rather than fail inside a solver.
@@ -1063,12 +1071,11 @@ fn validate(raw: RawScene, origin: &str, base_dir: &Path) -> Result<Scene, Scene
                 return Err(invalid(
                     format!("contacts[{ci}]"),
                     format!(
-                        "duplicate contact: floor {} of `{}` and floor {} of `{}` are already \
-                         joined by {by}; one contact per floor pair",
+                        "duplicate contact: floor {} of `{}` and {} are already joined by \
+                         {by}; one contact per floor pair",
                         left_dof + 1,
                         buildings[left].name,
-                        right_dof + 1,
-                        buildings[right].name
+                        right_side(right_dof),
                     ),
                 ));
             }
@@ -1084,13 +1091,12 @@ fn validate(raw: RawScene, origin: &str, base_dir: &Path) -> Result<Scene, Scene
                 return Err(invalid(
                     format!("contacts[{ci}]"),
                     format!(
-                        "floor {} of `{}` and floor {} of `{}` start penetrated by {delta0:.6e} m: \
+                        "floor {} of `{}` and {} start penetrated by {delta0:.6e} m: \
                          initial displacements (buildings.initial_displacement) close the gap \
                          of {} m at t = 0",
                         left_dof + 1,
                         buildings[left].name,
-                        right_dof + 1,
-                        buildings[right].name,
+                        right_side(right_dof),
                         rc.gap
                     ),
                 ));
