@@ -10,6 +10,11 @@
 //! δ = u_left − u_right − gap   (closed while the law's event function g ≥ 0, see law.rs)
 //! ```
 //!
+//! A wall contact (`right = "wall"`) has no e_right term and δ = u_left − gap: the wall
+//! moves with the ground, so it stands still in these relative coordinates. Its
+//! Kelvin–Voigt dashpot uses m_eff = m_left (the reduced mass m_l m_r/(m_l + m_r) as the
+//! wall's mass m_r → ∞).
+//!
 //! Two integrators:
 //! - `adaptive` (default, [`adaptive`]): Dormand–Prince 5(4) ([`dopri`]) with error
 //!   control, dense output, located contact events and steps that never straddle a record
