@@ -315,3 +315,36 @@ fn momentum_holds_a_floor_against_the_wall_until_the_force_turns_tensile() {
         "peak {umax}"
     );
 }
+
+#[test]
+fn truncated_modes_keep_the_restitution_law_exactly_at_a_wall() {
+    // With N kept modes the wall impulse is P = (1 + c_r) v / W, W = Σ_{n ≤ N} φ_n[i]²
+    // (mass-normalised shapes, the left building's kept modes only), and the floor's own
+    // velocity still jumps from v to −c_r v exactly.
+    let mut b = Building::new("stick", vec![1.0e6, 1.0e6, 0.8e6], vec![6e8, 5e8, 4e8], 0.0);
+    b.initial_velocity = vec![0.2, 0.4, 0.6];
+    let phi = b.modes().unwrap().phi;
+    for (n_modes, cr) in [(1, 0.65), (2, 1.0), (3, 0.3)] {
+        let mut scene = free_scene(vec![b.clone()], vec![wall_contact(2, 0.01, cr)], 0.5);
+        scene.momentum.modes = Some(n_modes);
+        let out = momentum::solve(&scene, None).unwrap();
+        assert!(!out.impacts.is_empty());
+        let w: f64 = (0..n_modes).map(|n| phi[(2, n)].powi(2)).sum();
+        for im in &out.impacts {
+            let v = im.relative_velocity_before;
+            let what = format!("{n_modes} modes, c_r {cr}: {im:?}");
+            assert!(
+                (im.relative_velocity_after + cr * v).abs() <= 1e-12 * v,
+                "{what}"
+            );
+            let p = (1.0 + cr) * v / w;
+            assert!((im.impulse - p).abs() <= 1e-12 * p, "{what}, P = {p}");
+        }
+        let e0 = 0.5 * (1.0e6 * 0.04 + 1.0e6 * 0.16 + 0.8e6 * 0.36);
+        assert!(
+            out.energy.balance_error.abs() <= 1e-10 * e0,
+            "{n_modes} modes: balance error {:e}",
+            out.energy.balance_error
+        );
+    }
+}
