@@ -19,6 +19,7 @@ fn pushed(persistent: bool) -> structure::Scene {
         right_dof: 0,
         gap: 0.05,
         restitution: 0.5,
+        wall: false,
     };
     let mut s = free_scene(vec![a, b], vec![c], 20.0);
     // Static: u_soft = 2/w1² = 0.20 m, u_stiff = 0.013 m: the floors are held together.

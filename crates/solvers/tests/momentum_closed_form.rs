@@ -42,6 +42,7 @@ fn post_impact_velocities_match_stereomechanics() {
             right_dof: 0,
             gap: 1e-6,
             restitution: e,
+            wall: false,
         };
         let mut scene = free_scene(vec![a, b], vec![c], 2e-6);
         scene.momentum.impulse = variant;
@@ -79,6 +80,7 @@ fn two_sticks(cr: f64, duration: f64) -> structure::Scene {
         right_dof: 4,
         gap: 0.02,
         restitution: cr,
+        wall: false,
     };
     let c2 = Contact {
         left: 0,
@@ -87,6 +89,7 @@ fn two_sticks(cr: f64, duration: f64) -> structure::Scene {
         right_dof: 2,
         gap: 0.015,
         restitution: cr,
+        wall: false,
     };
     free_scene(vec![a, b], vec![c, c2], duration)
 }
@@ -154,6 +157,7 @@ fn truncated_paper_variant_violates_restitution_consistent_does_not() {
             right_dof: 14,
             gap: 0.05,
             restitution: 0.65,
+            wall: false,
         };
         let mut s = free_scene(vec![a, b], vec![c], 5.0);
         s.momentum.modes = Some(3);

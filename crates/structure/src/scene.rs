@@ -166,12 +166,22 @@ pub struct Contact {
     pub gap: f64,
     /// Coefficient of restitution c_r in [0, 1].
     pub restitution: f64,
+    /// The right side is a rigid wall that moves with the ground (scene `right = "wall"`):
+    /// in the relative frame it stands still at u = gap, so δ = u_left − gap. For a wall
+    /// contact `right` and `right_dof` repeat `left` and `left_dof` (valid indices, never a
+    /// second body): code that reads the right side must check `wall` first.
+    pub wall: bool,
 }
 
+/// The name that makes a contact's right side a rigid wall (`right = "wall"`); no building
+/// may take it.
+pub const WALL: &str = "wall";
+
 impl Contact {
-    /// Gap function δ = u_left − u_right − gap (m): closed when δ ≥ 0.
+    /// Gap function δ = u_left − u_right − gap (m): closed when δ ≥ 0. For a wall contact
+    /// `u_right` is ignored (the wall is at relative displacement 0).
     pub fn penetration(&self, u_left: f64, u_right: f64) -> f64 {
-        u_left - u_right - self.gap
+        u_left - if self.wall { 0.0 } else { u_right } - self.gap
     }
 }
 
@@ -306,10 +316,11 @@ impl Scene {
         facings(&self.buildings, &self.story_heights, a, b)
     }
 
-    /// Pairs of buildings (a < b) joined by at least one contact, in order of first contact.
+    /// Pairs of buildings (a < b) joined by at least one contact, in order of first contact
+    /// (wall contacts join no pair).
     pub fn joined_pairs(&self) -> Vec<(usize, usize)> {
         let mut out: Vec<(usize, usize)> = Vec::new();
-        for c in &self.contacts {
+        for c in self.contacts.iter().filter(|c| !c.wall) {
             let p = (c.left.min(c.right), c.left.max(c.right));
             if !out.contains(&p) {
                 out.push(p);
@@ -620,6 +631,15 @@ fn validate(raw: RawScene, origin: &str, base_dir: &Path) -> Result<Scene, Scene
     let mut story_heights: Vec<Option<Vec<f64>>> = Vec::with_capacity(raw.buildings.len());
     for (bi, rb) in raw.buildings.into_iter().enumerate() {
         let key = |k: &str| format!("buildings[{bi}].{k}");
+        if rb.name == WALL {
+            return Err(invalid(
+                key("name"),
+                format!(
+                    "`{WALL}` is reserved: a contact with right = \"{WALL}\" is a rigid wall; \
+                     rename the building"
+                ),
+            ));
+        }
         if buildings.iter().any(|b: &Building| b.name == rb.name) {
             return Err(invalid(
                 key("name"),
@@ -878,8 +898,13 @@ fn validate(raw: RawScene, origin: &str, base_dir: &Path) -> Result<Scene, Scene
                 })
         };
         let left = find(&rc.left, "left")?;
-        let right = find(&rc.right, "right")?;
-        if left == right {
+        let wall = rc.right == WALL;
+        let right = if wall {
+            left
+        } else {
+            find(&rc.right, "right")?
+        };
+        if left == right && !wall {
             return Err(invalid(
                 key("right"),
                 format!(
@@ -890,7 +915,7 @@ fn validate(raw: RawScene, origin: &str, base_dir: &Path) -> Result<Scene, Scene
         }
         // Story heights on one side only: the floors cannot be matched by elevation.
         match (&story_heights[left], &story_heights[right]) {
-            (Some(_), None) | (None, Some(_)) => {
+            (Some(_), None) | (None, Some(_)) if !wall => {
                 let (with, without, wi) = if story_heights[left].is_some() {
                     (left, right, right)
                 } else {
@@ -921,6 +946,36 @@ fn validate(raw: RawScene, origin: &str, base_dir: &Path) -> Result<Scene, Scene
             Ok((f - 1) as usize)
         };
         let pairs: Vec<(usize, usize)> = match (&rc.floors, rc.left_floor, rc.right_floor) {
+            _ if wall => {
+                if rc.right_floor.is_some() {
+                    return Err(invalid(
+                        key("right_floor"),
+                        format!(
+                            "a wall (right = \"{WALL}\") has no floors: remove `right_floor` \
+                             and give only `left_floor`"
+                        ),
+                    ));
+                }
+                if rc.floors.is_some() {
+                    return Err(invalid(
+                        key("floors"),
+                        format!(
+                            "`floors` pairs the floors of two buildings; a wall (right = \
+                             \"{WALL}\") takes one `left_floor` per contact"
+                        ),
+                    ));
+                }
+                let lf = rc.left_floor.ok_or_else(|| {
+                    invalid(
+                        key("left_floor"),
+                        "missing field `left_floor`: the floor of `left` (from 1) that meets \
+                         the wall"
+                            .into(),
+                    )
+                })?;
+                let dof = floor(lf, left, "left_floor")?;
+                vec![(dof, dof)]
+            }
             (Some(mode), lf, rf) => {
                 if mode != "aligned" {
                     return Err(invalid(
@@ -992,6 +1047,14 @@ fn validate(raw: RawScene, origin: &str, base_dir: &Path) -> Result<Scene, Scene
                 ),
             ));
         }
+        // The right side in messages: a floor, or the wall.
+        let right_side = |dof: usize| {
+            if wall {
+                "the wall".to_string()
+            } else {
+                format!("floor {} of `{}`", dof + 1, buildings[right].name)
+            }
+        };
         for (left_dof, right_dof) in pairs {
             // The same floor pair twice (in either orientation) makes the contact system
             // singular: refuse it here rather than fail inside a solver.
@@ -1008,31 +1071,32 @@ fn validate(raw: RawScene, origin: &str, base_dir: &Path) -> Result<Scene, Scene
                 return Err(invalid(
                     format!("contacts[{ci}]"),
                     format!(
-                        "duplicate contact: floor {} of `{}` and floor {} of `{}` are already \
-                         joined by {by}; one contact per floor pair",
+                        "duplicate contact: floor {} of `{}` and {} are already joined by \
+                         {by}; one contact per floor pair",
                         left_dof + 1,
                         buildings[left].name,
-                        right_dof + 1,
-                        buildings[right].name
+                        right_side(right_dof),
                     ),
                 ));
             }
             // Initial penetration: δ = u_left − u_right − gap must not exceed round-off at
             // t = 0.
-            let delta0 = buildings[left].initial_displacement[left_dof]
-                - buildings[right].initial_displacement[right_dof]
-                - rc.gap;
+            let u_right = if wall {
+                0.0
+            } else {
+                buildings[right].initial_displacement[right_dof]
+            };
+            let delta0 = buildings[left].initial_displacement[left_dof] - u_right - rc.gap;
             if delta0 > 1e-9 * rc.gap.max(1e-3) {
                 return Err(invalid(
                     format!("contacts[{ci}]"),
                     format!(
-                        "floor {} of `{}` and floor {} of `{}` start penetrated by {delta0:.6e} m: \
+                        "floor {} of `{}` and {} start penetrated by {delta0:.6e} m: \
                          initial displacements (buildings.initial_displacement) close the gap \
                          of {} m at t = 0",
                         left_dof + 1,
                         buildings[left].name,
-                        right_dof + 1,
-                        buildings[right].name,
+                        right_side(right_dof),
                         rc.gap
                     ),
                 ));
@@ -1044,6 +1108,7 @@ fn validate(raw: RawScene, origin: &str, base_dir: &Path) -> Result<Scene, Scene
                 right_dof,
                 gap: rc.gap,
                 restitution: rc.restitution,
+                wall,
             });
             entry_of.push(ci);
         }

@@ -47,6 +47,7 @@ pub fn two_oscillators(
         right_dof: 0,
         gap,
         restitution: cr,
+        wall: false,
     };
     free_scene(vec![a, b], vec![c], duration)
 }

@@ -31,6 +31,7 @@
 //!     pound's `gap_element.tension = true`; with the default `false` pound clamps the force
 //!     at zero (see [`opensees_caveats`]).
 //!   - `hertz-damp` has no OpenSees equivalent here: [`ExportError::Unsupported`].
+//!   - a wall contact (`right = "wall"`) is refused the same way (not written yet).
 //! - Ground motion: `timeSeries('Path', 1, '-dt', dt, '-values', *record_g, '-factor',
 //!   G·scale)` with the record as read (converted to g) and the scene's scale factor (the
 //!   one that gives the requested PGA), then `pattern('UniformExcitation', 1, 1, '-accel',
@@ -127,6 +128,15 @@ pub fn opensees_script(scene: &Scene) -> Result<String, ExportError> {
             what: "gap_element.law = \"hertz-damp\"".into(),
             why: "the export writes the linear law as ElasticPPGap and kelvin-voigt as \
                   ViscoelasticGap; set gap_element.law to \"linear\" or \"kelvin-voigt\""
+                .into(),
+        });
+    }
+
+    if let Some(i) = scene.contacts.iter().position(|c| c.wall) {
+        return Err(ExportError::Unsupported {
+            what: format!("contact {i} with right = \"wall\""),
+            why: "the script joins two building nodes per contact; a wall (a fixed node, \
+                  which moves with the ground under UniformExcitation) is not written yet"
                 .into(),
         });
     }

@@ -186,7 +186,8 @@ pub fn history_csv(scene: &Scene, history: &History) -> Result<String, OutputErr
                     if c.left == bi {
                         f[c.left_dof] -= force;
                     }
-                    if c.right == bi {
+                    // A wall takes the reaction: no force on a second floor.
+                    if c.right == bi && !c.wall {
                         f[c.right_dof] += force;
                     }
                 }

@@ -43,13 +43,21 @@ pub fn modes_table(scene: &Scene) -> Result<String, structure::ModelError> {
     for (ci, c) in scene.contacts.iter().enumerate() {
         let (bl, br) = (&scene.buildings[c.left], &scene.buildings[c.right]);
         let rl = bl.modes()?.contact_flexibility(c.left_dof);
-        let rr = br.modes()?.contact_flexibility(c.right_dof);
+        // A wall has no modes: its column stays empty.
+        let rr = if c.wall {
+            vec![]
+        } else {
+            br.modes()?.contact_flexibility(c.right_dof)
+        };
+        let right = if c.wall {
+            "the wall".to_string()
+        } else {
+            format!("{} floor {}", br.name, c.right_dof + 1)
+        };
         s.push_str(&format!(
-            "contact {ci}: {} floor {} <-> {} floor {}, gap {} m, c_r {}\n  r_N (contact flexibility fraction kept by N modes)\n  N     left     right\n",
+            "contact {ci}: {} floor {} <-> {right}, gap {} m, c_r {}\n  r_N (contact flexibility fraction kept by N modes)\n  N     left     right\n",
             bl.name,
             c.left_dof + 1,
-            br.name,
-            c.right_dof + 1,
             c.gap,
             c.restitution
         ));
@@ -87,6 +95,16 @@ pub fn modes_json(scene: &Scene) -> Result<serde_json::Value, structure::ModelEr
         let rl = scene.buildings[c.left]
             .modes()?
             .contact_flexibility(c.left_dof);
+        if c.wall {
+            // A wall: no right floor and no right flexibility.
+            contacts.push(serde_json::json!({
+                "left": scene.buildings[c.left].name, "left_floor": c.left_dof + 1,
+                "right": structure::scene::WALL,
+                "gap_m": c.gap, "restitution": c.restitution,
+                "r_n_left": rl,
+            }));
+            continue;
+        }
         let rr = scene.buildings[c.right]
             .modes()?
             .contact_flexibility(c.right_dof);
@@ -330,6 +348,16 @@ pub fn resolved_scene(scene: &Scene) -> serde_json::Value {
         .contacts
         .iter()
         .map(|c| {
+            if c.wall {
+                // Round-trips as `right = "wall"` (no right_floor).
+                return serde_json::json!({
+                    "left": scene.buildings[c.left].name,
+                    "left_floor": c.left_dof + 1,
+                    "right": structure::scene::WALL,
+                    "gap": c.gap,
+                    "restitution": c.restitution,
+                });
+            }
             serde_json::json!({
                 "left": scene.buildings[c.left].name,
                 "left_floor": c.left_dof + 1,

@@ -449,7 +449,12 @@ pub fn run_case(spec: &CaseSpec, studies_dir: &Path) -> CaseResult {
             .collect();
         let (il, ir) = (off[c.left] + c.left_dof, off[c.right] + c.right_dof);
         let ul: Vec<f64> = h.displacement.iter().map(|r| r[il]).collect();
-        let ur: Vec<f64> = h.displacement.iter().map(|r| r[ir]).collect();
+        // A wall stands at relative displacement 0.
+        let ur: Vec<f64> = h
+            .displacement
+            .iter()
+            .map(|r| if c.wall { 0.0 } else { r[ir] })
+            .collect();
         peak_closure = ul
             .iter()
             .zip(&ur)
@@ -477,7 +482,7 @@ pub fn run_case(spec: &CaseSpec, studies_dir: &Path) -> CaseResult {
                 scene.contacts.first().and_then(|c| {
                     if c.left == b {
                         Some(c.left_dof + 1)
-                    } else if c.right == b {
+                    } else if c.right == b && !c.wall {
                         Some(c.right_dof + 1)
                     } else {
                         None

@@ -91,11 +91,10 @@ fn rhs(sys: &System, seg: &Segment, modes: &[Mode], t: f64, y: &[f64], o: &mut [
     for (ci, c) in sys.contacts.iter().enumerate() {
         let m = modes[ci];
         if m.closed {
-            let d = u[c.l] - u[c.r] - c.gap;
-            let dd = v[c.l] - v[c.r];
+            let d = c.rel(u) - c.gap;
+            let dd = c.rel(v);
             let f = c.law.force(d, dd, m.v_close);
-            acc[c.l] -= f;
-            acc[c.r] += f;
+            c.push_apart(acc, f);
             pc += f * dd;
             extra[3 + ci] = f;
         } else {
@@ -125,8 +124,7 @@ fn observe(sys: &System, tracker: &mut ResponseTracker, modes: &[Mode], y: &[f64
         .zip(modes)
         .map(|(c, m)| {
             if m.closed {
-                c.law
-                    .force(u[c.l] - u[c.r] - c.gap, v[c.l] - v[c.r], m.v_close)
+                c.law.force(c.rel(u) - c.gap, c.rel(v), m.v_close)
             } else {
                 0.0
             }
@@ -137,11 +135,15 @@ fn observe(sys: &System, tracker: &mut ResponseTracker, modes: &[Mode], y: &[f64
 
 /// δ, δ̇, δ̈ of contact `c` on the dense output.
 #[inline]
-fn kin(dp: &Dopri5, n: usize, l: usize, r: usize, gap: f64, th: f64) -> (f64, f64) {
-    (
-        dp.dense(l, th) - dp.dense(r, th) - gap,
-        dp.dense(n + l, th) - dp.dense(n + r, th),
-    )
+/// (δ, δ̇) of a contact from the dense output at θ; `r = None` for a wall (u_r ≡ 0).
+fn kin(dp: &Dopri5, n: usize, l: usize, r: Option<usize>, gap: f64, th: f64) -> (f64, f64) {
+    match r {
+        Some(r) => (
+            dp.dense(l, th) - dp.dense(r, th) - gap,
+            dp.dense(n + l, th) - dp.dense(n + r, th),
+        ),
+        None => (dp.dense(l, th) - gap, dp.dense(n + l, th)),
+    }
 }
 
 pub(crate) fn run(
@@ -178,8 +180,8 @@ pub(crate) fn run(
                         episodes: &mut [Episode],
                         caps: &mut [f64]| {
         let c = &sys.contacts[ci];
-        let d = y[c.l] - y[c.r] - c.gap;
-        let dd = y[n + c.l] - y[n + c.r];
+        let d = c.rel(&y[..n]) - c.gap;
+        let dd = c.rel(&y[n..2 * n]);
         modes[ci] = Mode {
             closed: true,
             v_close: dd,
@@ -195,8 +197,8 @@ pub(crate) fn run(
     };
 
     for (ci, c) in sys.contacts.iter().enumerate() {
-        let d = y[c.l] - y[c.r] - c.gap;
-        let dd = y[n + c.l] - y[n + c.r];
+        let d = c.rel(&y[..n]) - c.gap;
+        let dd = c.rel(&y[n..2 * n]);
         if c.law.event(d, dd) > 0.0 {
             open_episode(ci, 0.0, &y, &mut modes, &mut episodes, &mut caps);
             stats.impacts += 1;
@@ -297,7 +299,7 @@ pub(crate) fn run(
         for (ci, c) in sys.contacts.iter().enumerate() {
             let closed = modes[ci].closed;
             let law = &c.law;
-            let (l, r, gap) = (c.l, c.r, c.gap);
+            let (l, r, gap) = (c.l, (!c.wall).then_some(c.r), c.gap);
             let g_at = |th: f64| {
                 let (d, dd) = kin(&dp, n, l, r, gap, th);
                 law.event(d, dd)
@@ -361,11 +363,17 @@ pub(crate) fn run(
             if !modes[ci].closed {
                 continue;
             }
-            let (l, r, gap, law, vc) = (c.l, c.r, c.gap, &c.law, modes[ci].v_close);
+            let (l, r, gap, law, vc) = (
+                c.l,
+                (!c.wall).then_some(c.r),
+                c.gap,
+                &c.law,
+                modes[ci].v_close,
+            );
             let ep = &mut episodes[ci];
             let force_rate = |th: f64| {
                 let (d, dd) = kin(&dp, n, l, r, gap, th);
-                let ddd = dp.dense_rate(n + l, th) - dp.dense_rate(n + r, th);
+                let ddd = dp.dense_rate(n + l, th) - r.map_or(0.0, |r| dp.dense_rate(n + r, th));
                 let (kd, kv) = law.tangent(d, dd, vc);
                 kd * dd + kv * ddd
             };
@@ -423,7 +431,7 @@ pub(crate) fn run(
                 }
                 let c = &sys.contacts[ci];
                 if modes[ci].closed {
-                    let dd = y[n + c.l] - y[n + c.r];
+                    let dd = c.rel(&y[n..2 * n]);
                     impacts.push(episodes[ci].impact(ci, t, dd, y[imp0 + ci]));
                     modes[ci].closed = false;
                     caps[ci] = f64::INFINITY;
@@ -474,7 +482,7 @@ pub(crate) fn run(
     // Episodes still open at the end are reported up to the end of the analysis.
     for (ci, c) in sys.contacts.iter().enumerate() {
         if modes[ci].closed {
-            let dd = y[n + c.l] - y[n + c.r];
+            let dd = c.rel(&y[n..2 * n]);
             impacts.push(episodes[ci].impact(ci, t, dd, y[imp0 + ci]));
         }
     }

@@ -10,6 +10,11 @@
 //! δ = u_left − u_right − gap   (closed while the law's event function g ≥ 0, see law.rs)
 //! ```
 //!
+//! A wall contact (`right = "wall"`) has no e_right term and δ = u_left − gap: the wall
+//! moves with the ground, so it stands still in these relative coordinates. Its
+//! Kelvin–Voigt dashpot uses m_eff = m_left (the reduced mass m_l m_r/(m_l + m_r) as the
+//! wall's mass m_r → ∞).
+//!
 //! Two integrators:
 //! - `adaptive` (default, [`adaptive`]): Dormand–Prince 5(4) ([`dopri`]) with error
 //!   control, dense output, located contact events and steps that never straddle a record
@@ -115,9 +120,31 @@ pub(crate) struct Block {
 #[derive(Debug, Clone)]
 pub(crate) struct ContactDof {
     pub l: usize,
+    /// The right floor; equals `l` for a wall contact (never read then, see [`Self::rel`]).
     pub r: usize,
     pub gap: f64,
     pub law: Law,
+    /// The right side is a rigid wall moving with the ground: u_r ≡ v_r ≡ 0 in the
+    /// relative frame, and the contact force acts on the left floor only.
+    pub wall: bool,
+}
+
+impl ContactDof {
+    /// x_l − x_r of a per-floor vector (displacements or velocities); x_l for a wall.
+    #[inline]
+    pub fn rel(&self, x: &[f64]) -> f64 {
+        x[self.l] - if self.wall { 0.0 } else { x[self.r] }
+    }
+
+    /// Adds the contact force F ≥ 0 (pushing the floors apart) to a per-floor vector:
+    /// −F on the left floor, +F on the right one (the wall takes it for a wall contact).
+    #[inline]
+    pub fn push_apart(&self, acc: &mut [f64], f: f64) {
+        acc[self.l] -= f;
+        if !self.wall {
+            acc[self.r] += f;
+        }
+    }
 }
 
 /// The assembled structure: everything the right-hand side needs.
@@ -193,12 +220,20 @@ impl System {
             .map(|c| {
                 let l = offsets[c.left] + c.left_dof;
                 let r = offsets[c.right] + c.right_dof;
-                let m_eff = mass[l] * mass[r] / (mass[l] + mass[r]);
+                // Against a wall (infinite mass) the two-mass reduced mass m_l m_r/(m_l + m_r)
+                // tends to the floor mass m_l: the Kelvin–Voigt constant is set for the
+                // floor alone striking the wall.
+                let m_eff = if c.wall {
+                    mass[l]
+                } else {
+                    mass[l] * mass[r] / (mass[l] + mass[r])
+                };
                 ContactDof {
                     l,
                     r,
                     gap: c.gap,
                     law: Law::new(&scene.gap_element, c.restitution, m_eff),
+                    wall: c.wall,
                 }
             })
             .collect();
@@ -305,7 +340,7 @@ impl System {
             .iter()
             .enumerate()
             .filter(|(i, _)| closed(*i))
-            .map(|(_, c)| c.law.stored_energy(u[c.l] - u[c.r] - c.gap))
+            .map(|(_, c)| c.law.stored_energy(c.rel(u) - c.gap))
             .sum()
     }
 

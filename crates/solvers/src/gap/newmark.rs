@@ -113,14 +113,14 @@ pub(crate) fn run(
         .map(|c| {
             let mut w = DVector::zeros(n);
             w[c.l] = 1.0;
-            w[c.r] = -1.0;
+            if !c.wall {
+                w[c.r] = -1.0;
+            }
             solve(&mut w, &mut tmp);
             w
         })
         .collect();
-    let wz = DMatrix::from_fn(nc, nc, |i, j| {
-        z[j][sys.contacts[i].l] - z[j][sys.contacts[i].r]
-    });
+    let wz = DMatrix::from_fn(nc, nc, |i, j| sys.contacts[i].rel(z[j].as_slice()));
 
     let mut u = sys.u0.clone();
     let mut v = sys.v0.clone();
@@ -141,7 +141,7 @@ pub(crate) fn run(
 
     let kin = |u: &[f64], v: &[f64], ci: usize| {
         let c = &sys.contacts[ci];
-        (u[c.l] - u[c.r] - c.gap, v[c.l] - v[c.r])
+        (c.rel(u) - c.gap, c.rel(v))
     };
 
     // Initial state and acceleration.
@@ -170,8 +170,7 @@ pub(crate) fn run(
         acc[i] = f[i] - sys.mass[i] * ag;
     }
     for (ci, c) in sys.contacts.iter().enumerate() {
-        acc[c.l] -= force[ci];
-        acc[c.r] += force[ci];
+        c.push_apart(&mut acc, force[ci]);
     }
     for i in 0..n {
         acc[i] *= sys.inv_mass[i];
@@ -253,8 +252,7 @@ pub(crate) fn run(
                     let (fc, kd, kv) = frozen(c, on[ci], d, dd, vc_trial[ci]);
                     f_new[ci] = fc;
                     alpha[ci] = kd + a1 * kv;
-                    res[c.l] -= fc;
-                    res[c.r] += fc;
+                    c.push_apart(res.as_mut_slice(), fc);
                     scale = scale.max(fc.abs());
                 }
                 let rnorm = res.amax();
@@ -285,7 +283,7 @@ pub(crate) fn run(
                     });
                     let s = DVector::from_fn(m, |i, _| {
                         let c = &sys.contacts[act[i]];
-                        alpha[act[i]] * (res[c.l] - res[c.r])
+                        alpha[act[i]] * c.rel(res.as_slice())
                     });
                     let x = g.lu().solve(&s).ok_or_else(|| SolverError::NewtonFailure {
                         time: t1,

@@ -1,6 +1,8 @@
 //! Contact geometry in modal coordinates and the impact impulses (paper eqs 19–24).
 //!
-//! Contact c joins floor i of building L to floor j of building R. With the dense modal row
+//! Contact c joins floor i of building L to floor j of building R, or to a rigid wall that
+//! moves with the ground (then g_c = (φ_L[i]) alone and v_c is the floor's own velocity
+//! relative to the ground). With the dense modal row
 //! g_c = (φ_L[i] on L's modes, −φ_R[j] on R's modes), the gap function and the relative
 //! (approach) velocity are δ_c = g_c·q − gap and v_c = g_c·q̇. An impulse pair P_c ≥ 0
 //! pushes the floors apart: Δq̇ = −g_c P_c, so Δv = −W P with the Delassus matrix
@@ -31,16 +33,25 @@ pub struct ContactGeom {
     pub restitution: f64,
     /// Dense modal row g_c (see module docs).
     pub g: Vec<f64>,
-    /// Floor masses m_k (left), m_l (right), kg.
+    /// Floor masses m_k (left), m_l (right), kg (m_l = ∞ for a wall).
     pub m_left: f64,
     pub m_right: f64,
+    /// The right side is a rigid wall ([`Contact::wall`]): `right`/`right_dof` repeat the
+    /// left side and are not a second body.
+    pub wall: bool,
 }
 
 impl ContactGeom {
     pub fn new(modal: &Modal, c: &Contact) -> ContactGeom {
         let gl = modal.floor_row(c.left, c.left_dof);
-        let gr = modal.floor_row(c.right, c.right_dof);
-        let g = gl.iter().zip(&gr).map(|(a, b)| a - b).collect();
+        // A wall (rigid, moving with the ground) has no modes: g_c is the left row alone,
+        // so W_cc = Σ_kept φ_L[i]² and P = (1 + e) v / W_cc (the wall takes the reaction).
+        let g = if c.wall {
+            gl
+        } else {
+            let gr = modal.floor_row(c.right, c.right_dof);
+            gl.iter().zip(&gr).map(|(a, b)| a - b).collect()
+        };
         ContactGeom {
             left: c.left,
             right: c.right,
@@ -50,7 +61,12 @@ impl ContactGeom {
             restitution: c.restitution,
             g,
             m_left: modal.buildings[c.left].masses[c.left_dof],
-            m_right: modal.buildings[c.right].masses[c.right_dof],
+            m_right: if c.wall {
+                f64::INFINITY
+            } else {
+                modal.buildings[c.right].masses[c.right_dof]
+            },
+            wall: c.wall,
         }
     }
 
@@ -183,13 +199,21 @@ pub fn apply_paper(
         let yk: f64 = rl.iter().zip(&v_before).map(|(a, b)| a * b).sum();
         let yl: f64 = rr.iter().zip(&v_before).map(|(a, b)| a * b).sum();
         let (mk, ml, e) = (ct.m_left, ct.m_right, ct.restitution);
-        // eq (23): ẏ_l⁺; eq (24) (l for the printed i): ẏ_k⁺.
-        let yl_after = (ml * yl + mk * yk - e * mk * (yl - yk)) / (ml + mk);
-        let yk_after = (mk * yk + ml * yl + e * ml * (yl - yk)) / (ml + mk);
-        let (dyk, dyl) = (yk_after - yk, yl_after - yl);
+        let (dyk, dyl) = if ct.wall {
+            // m_l → ∞ with ẏ_l = 0 (the wall): eq (24) gives ẏ_k⁺ = −e ẏ_k.
+            (-(1.0 + e) * yk, 0.0)
+        } else {
+            // eq (23): ẏ_l⁺; eq (24) (l for the printed i): ẏ_k⁺.
+            let yl_after = (ml * yl + mk * yk - e * mk * (yl - yk)) / (ml + mk);
+            let yk_after = (mk * yk + ml * yl + e * ml * (yl - yk)) / (ml + mk);
+            (yk_after - yk, yl_after - yl)
+        };
         // Δq̇ = Φᵀ M Δẏ: only the contact floor is nonzero.
         for n in 0..v.len() {
-            v[n] += rl[n] * mk * dyk + rr[n] * ml * dyl;
+            v[n] += rl[n] * mk * dyk;
+            if !ct.wall {
+                v[n] += rr[n] * ml * dyl;
+            }
         }
         out.push((c, (mk * dyk).abs()));
     }

@@ -114,9 +114,10 @@ pub fn solve_with_diagnostics(
             ContactFlexibility {
                 contact: i,
                 modes_left: bl.range.len(),
-                modes_right: br.range.len(),
+                // A wall has no modes and no flexibility.
+                modes_right: if c.wall { 0 } else { br.range.len() },
                 r_n_left: r(c.left, c.left_dof),
-                r_n_right: r(c.right, c.right_dof),
+                r_n_right: if c.wall { 0.0 } else { r(c.right, c.right_dof) },
             }
         })
         .collect();

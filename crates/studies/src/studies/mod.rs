@@ -246,6 +246,15 @@ pub fn all_cases(st: &dyn Study, ctx: &Ctx) -> Result<Vec<CaseSpec>> {
         let c = &scene.contacts[0];
         let mut pair = [c.left, c.right];
         pair.sort();
+        if c.wall {
+            return Err(StudyError::Definition {
+                file: ctx.def_file.clone(),
+                message: format!(
+                    "study `{}` reports buildings 1 and 2 at contact 0, which in `{}` is a wall contact (right = \"wall\"): the studies compare two buildings",
+                    ctx.name, first.scene
+                ),
+            });
+        }
         if pair != [0, 1] {
             return Err(StudyError::Definition {
                 file: ctx.def_file.clone(),

@@ -135,6 +135,7 @@ fn every_floor(scene: &Scene, gap: f64, cr: f64) -> Vec<Contact> {
             right_dof: dof,
             gap,
             restitution: cr,
+            wall: false,
         })
         .collect()
 }
