@@ -31,7 +31,10 @@
 //!     pound's `gap_element.tension = true`; with the default `false` pound clamps the force
 //!     at zero (see [`opensees_caveats`]).
 //!   - `hertz-damp` has no OpenSees equivalent here: [`ExportError::Unsupported`].
-//!   - a wall contact (`right = "wall"`) is refused the same way (not written yet).
+//!   - a wall contact (`right = "wall"`) joins its floor to a fixed node (at relative
+//!     displacement 0, i.e. moving with the ground under `UniformExcitation`), with the
+//!     floor mass as the Kelvin–Voigt effective mass (the limit of an infinitely heavy
+//!     neighbour), as pound's gap element does.
 //! - Ground motion: `timeSeries('Path', 1, '-dt', dt, '-values', *record_g, '-factor',
 //!   G·scale)` with the record as read (converted to g) and the scene's scale factor (the
 //!   one that gives the requested PGA), then `pattern('UniformExcitation', 1, 1, '-accel',
@@ -128,15 +131,6 @@ pub fn opensees_script(scene: &Scene) -> Result<String, ExportError> {
             what: "gap_element.law = \"hertz-damp\"".into(),
             why: "the export writes the linear law as ElasticPPGap and kelvin-voigt as \
                   ViscoelasticGap; set gap_element.law to \"linear\" or \"kelvin-voigt\""
-                .into(),
-        });
-    }
-
-    if let Some(i) = scene.contacts.iter().position(|c| c.wall) {
-        return Err(ExportError::Unsupported {
-            what: format!("contact {i} with right = \"wall\""),
-            why: "the script joins two building nodes per contact; a wall (a fixed node, \
-                  which moves with the ground under UniformExcitation) is not written yet"
                 .into(),
         });
     }
@@ -320,11 +314,14 @@ SETTINGS = {settings_lit}
     s.push_str("# Contacts: floors counted from 1. In contact while u_left - u_right >= gap.\n");
     s.push_str("CONTACTS = [\n");
     for c in &scene.contacts {
-        let (ml, mr) = (
-            scene.buildings[c.left].masses[c.left_dof],
-            scene.buildings[c.right].masses[c.right_dof],
-        );
-        let m_eff = ml * mr / (ml + mr);
+        let ml = scene.buildings[c.left].masses[c.left_dof];
+        // Against a wall the effective mass is the floor's own (m_r → ∞).
+        let m_eff = if c.wall {
+            ml
+        } else {
+            let mr = scene.buildings[c.right].masses[c.right_dof];
+            ml * mr / (ml + mr)
+        };
         let k = scene.gap_element.stiffness;
         let (law, dashpot) = match scene.gap_element.law {
             ContactLaw::Linear => ("linear", 0.0),
@@ -333,15 +330,16 @@ SETTINGS = {settings_lit}
                 ("kelvin-voigt", 2.0 * xi * (k * m_eff).sqrt())
             }
         };
-        let _ = writeln!(
+        let _ =
+            writeln!(
             s,
             "    {{\"left\": {}, \"left_floor\": {}, \"right\": {}, \"right_floor\": {},\n     \
              \"gap\": {}, \"restitution\": {}, \"law\": {}, \"stiffness\": {}, \"dashpot\": {}}},  \
              # {} floor {} <-> {} floor {}; gap m, k N/m, c N*s/m",
             c.left,
             c.left_dof + 1,
-            c.right,
-            c.right_dof + 1,
+            if c.wall { "None".to_string() } else { c.right.to_string() },
+            if c.wall { "None".to_string() } else { (c.right_dof + 1).to_string() },
             num(c.gap),
             num(c.restitution),
             pystr(law),
@@ -349,14 +347,14 @@ SETTINGS = {settings_lit}
             num(dashpot),
             scene.buildings[c.left].name,
             c.left_dof + 1,
-            scene.buildings[c.right].name,
-            c.right_dof + 1,
+            if c.wall { "the wall" } else { &scene.buildings[c.right].name },
+            if c.wall { 0 } else { c.right_dof + 1 },
         );
     }
     s.push_str("]\n");
     let _ = writeln!(
         s,
-        "# Compressive yield force of the linear law's ElasticPPGap (N): out of reach.\nFY_NEVER = {}\n",
+        "# Compressive yield force of the linear law's ElasticPPGap (N): out of reach.\nFY_NEVER = {}\n# The fixed node of wall contacts (\"right\": None), created by build().\nWALL_NODE = None\n",
         num(FY_NEVER)
     );
 
@@ -406,6 +404,14 @@ def build():
             nodes.append(tag)
             below = tag
         floors.append(nodes)
+    if any(c["right"] is None for c in CONTACTS):
+        # The wall: a fixed node, created with the model so that the eigen analysis (and the
+        # modal damping built from it) covers it.
+        global WALL_NODE
+        tag += 1
+        WALL_NODE = tag
+        ops.node(WALL_NODE, 0.0)
+        ops.fix(WALL_NODE, 1)
     return floors, tag
 
 
@@ -430,11 +436,13 @@ def modal_damping(floors):
 
 
 def add_contacts(floors, tag):
-    """The contact elements (after the eigen analysis: their gaps are open at rest)."""
+    """The contact elements (after the eigen analysis: their gaps are open at rest). A wall
+    contact ("right": None) joins its floor to a fixed node: at relative displacement 0 under
+    UniformExcitation, i.e. a wall that moves with the ground."""
     tags = []
     for c in CONTACTS:
         left = floors[c["left"]][c["left_floor"] - 1]
-        right = floors[c["right"]][c["right_floor"] - 1]
+        right = WALL_NODE if c["right"] is None else floors[c["right"]][c["right_floor"] - 1]
         tag += 1
         # zeroLength deformation = u_j - u_i = u_right - u_left (iNode left, jNode right).
         # Contact when u_left - u_right >= gap, i.e. deformation <= -gap: a compression
@@ -484,12 +492,14 @@ def initial_conditions(floors, omega, phi):
         off += len(b["masses"])
     for c in CONTACTS:
         il = index[(c["left"], c["left_floor"])]
-        ir = index[(c["right"], c["right_floor"])]
-        delta = u0[il] - u0[ir] - c["gap"]
+        ir = None if c["right"] is None else index[(c["right"], c["right_floor"])]
+        ur, vr = (0.0, 0.0) if ir is None else (u0[ir], v0[ir])
+        delta = u0[il] - ur - c["gap"]
         if delta > 0.0:
-            force = c["stiffness"] * delta + c["dashpot"] * (v0[il] - v0[ir])
+            force = c["stiffness"] * delta + c["dashpot"] * (v0[il] - vr)
             ku[il] += force
-            ku[ir] -= force
+            if ir is not None:
+                ku[ir] -= force
     ag0 = RECORD_G[0] * RECORD_FACTOR if RECORD_NPTS > 0 else 0.0
     for i, t in enumerate(nodes):
         if u0[i] != 0.0:
@@ -519,9 +529,13 @@ class Tracker:
     def contact_state(self, i):
         c = CONTACTS[i]
         left = self.floors[c["left"]][c["left_floor"] - 1]
-        right = self.floors[c["right"]][c["right_floor"] - 1]
-        delta = ops.nodeDisp(left, 1) - ops.nodeDisp(right, 1) - c["gap"]
-        ddot = ops.nodeVel(left, 1) - ops.nodeVel(right, 1)
+        if c["right"] is None:
+            u_r, v_r = 0.0, 0.0
+        else:
+            right = self.floors[c["right"]][c["right_floor"] - 1]
+            u_r, v_r = ops.nodeDisp(right, 1), ops.nodeVel(right, 1)
+        delta = ops.nodeDisp(left, 1) - u_r - c["gap"]
+        ddot = ops.nodeVel(left, 1) - v_r
         # Basic force of the zeroLength element = material stress (negative in compression).
         force = -ops.basicForce(self.contact_tags[i])[0]
         return delta, ddot, force
