@@ -506,7 +506,7 @@ pub fn run_case(spec: &CaseSpec, studies_dir: &Path) -> CaseResult {
         restitution_min: rmin,
         restitution_max: rmax,
         max_penetration: max_pen,
-        approach_speed_median: median(&approach),
+        approach_speed_median: crate::studies::stats::median(&approach),
         approach_speed_max: approach.iter().copied().reduce(f64::max),
         persistent_contacts: run.persistent_contacts.len(),
         impacts_nonpositive_approach: run
@@ -548,18 +548,6 @@ pub fn run_case(spec: &CaseSpec, studies_dir: &Path) -> CaseResult {
         outputs: Some(outputs),
         wall_seconds: best,
         wall_seconds_all: walls,
-    }
-}
-
-/// The median of `v` (mean of the middle two for an even count); None when empty.
-fn median(v: &[f64]) -> Option<f64> {
-    let mut s = v.to_vec();
-    s.sort_by(f64::total_cmp);
-    let n = s.len();
-    match n {
-        0 => None,
-        _ if n % 2 == 1 => Some(s[n / 2]),
-        _ => Some(0.5 * (s[n / 2 - 1] + s[n / 2])),
     }
 }
 

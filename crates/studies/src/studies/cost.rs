@@ -17,6 +17,7 @@
 use serde::Deserialize;
 use solvers::Method;
 
+use super::stats::percentile;
 use super::{default_pga, failures_note, record_label, shear_error, write_summary, Ctx, Study};
 use crate::plot::{figure, Marker, Panel, PanelKind, Series, VLine};
 use crate::sweep::{CaseOutputs, CaseResult, CaseSpec, Result, Results};
@@ -170,19 +171,13 @@ fn points(ctx: &Ctx, d: &Def) -> Vec<Point> {
 
 /// Fastest, median and slowest of a case's repeats, s.
 fn spread(r: &CaseResult) -> (f64, f64, f64) {
-    let mut w: Vec<f64> = if r.wall_seconds_all.is_empty() {
-        vec![r.wall_seconds]
+    let w: &[f64] = if r.wall_seconds_all.is_empty() {
+        std::slice::from_ref(&r.wall_seconds)
     } else {
-        r.wall_seconds_all.clone()
+        &r.wall_seconds_all
     };
-    w.sort_by(f64::total_cmp);
-    let n = w.len();
-    let med = if n % 2 == 1 {
-        w[n / 2]
-    } else {
-        0.5 * (w[n / 2 - 1] + w[n / 2])
-    };
-    (w[0], med, w[n - 1])
+    let q = |p: f64| percentile(w, p).unwrap_or(r.wall_seconds);
+    (q(0.0), q(0.5), q(1.0))
 }
 
 /// One measured point of the figure and the CPU table.

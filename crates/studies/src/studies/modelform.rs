@@ -25,6 +25,7 @@ use serde::Deserialize;
 use solvers::Method;
 use structure::{Contact, Scene};
 
+use super::stats::median;
 use super::{
     amplification, default_pga, default_records, failures_note, record_label, write_summary, Ctx,
     Study,
@@ -377,7 +378,7 @@ impl Study for ModelForm {
                 "impacts momentum", "impacts gap el.",
             ],
         );
-        let med = |vals: Vec<Option<f64>>| median(vals.into_iter().flatten().collect());
+        let med = |vals: Vec<Option<f64>>| median(&vals.into_iter().flatten().collect::<Vec<_>>());
         // Records on which the momentum method (all modes) has at least one impact: the
         // statistics over records are taken over these only (a record that never pounds has
         // amplification 1 and would dilute them).
@@ -750,32 +751,5 @@ impl Study for ModelForm {
                 ),
             ],
         )
-    }
-}
-
-/// Median of the values (mean of the two middle ones for an even count); None if empty.
-fn median(mut v: Vec<f64>) -> Option<f64> {
-    v.retain(|x| x.is_finite());
-    if v.is_empty() {
-        return None;
-    }
-    v.sort_by(|a, b| a.total_cmp(b));
-    let n = v.len();
-    Some(if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn median_of_odd_and_even_counts() {
-        assert_eq!(median(vec![3.0, 1.0, 2.0]), Some(2.0));
-        assert_eq!(median(vec![4.0, 1.0, 2.0, 3.0]), Some(2.5));
-        assert_eq!(median(vec![f64::NAN]), None);
     }
 }
