@@ -341,6 +341,15 @@ pub fn resolved_scene(scene: &Scene) -> serde_json::Value {
             if let Some(Some(h)) = scene.story_heights.get(bi) {
                 v["story_height"] = serde_json::json!(h);
             }
+            if let structure::model::StoryLaw::Bilinear {
+                yield_shear,
+                hardening_ratio,
+            } = &b.story_law
+            {
+                v["story_law"] = serde_json::json!("bilinear");
+                v["yield_shear"] = serde_json::json!(yield_shear);
+                v["hardening_ratio"] = serde_json::json!(hardening_ratio);
+            }
             v
         })
         .collect();
