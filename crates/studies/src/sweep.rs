@@ -263,6 +263,18 @@ pub struct CaseOutputs {
     pub story_shear_max: Vec<Vec<f64>>,
     /// Peak |floor displacement|, m, per building, floor 1 first.
     pub floor_displacement_max: Vec<Vec<f64>>,
+    /// Peak |story drift| u_j − u_{j−1}, m, per building, story 1 first (empty in case
+    /// files written before it existed).
+    #[serde(default)]
+    pub story_drift_max: Vec<Vec<f64>>,
+    /// Story drift at the end of the analysis, m, per building, story 1 first: the residual
+    /// drift of yielding stories (empty when the solver does not report it).
+    #[serde(default)]
+    pub story_drift_residual: Vec<Vec<f64>>,
+    /// Hysteretic energy dissipated by yielding stories, J (energy audit); None when the
+    /// solver does not report it.
+    #[serde(default)]
+    pub energy_hysteretic: Option<f64>,
     /// Impacts (momentum) or contact episodes (gap element).
     pub impacts: usize,
     pub impact_times: Vec<f64>,
@@ -500,6 +512,21 @@ pub fn run_case(spec: &CaseSpec, studies_dir: &Path) -> CaseResult {
             .iter()
             .map(|b| b.floor_displacement_max.clone())
             .collect(),
+        // Linear stories: V = k₀ × drift, so the peak drift is V_max / k₀.
+        story_drift_max: run
+            .buildings
+            .iter()
+            .zip(&scene.buildings)
+            .map(|(r, b)| {
+                r.story_shear_max
+                    .iter()
+                    .zip(&b.story_stiffness)
+                    .map(|(v, k)| v / k)
+                    .collect()
+            })
+            .collect(),
+        story_drift_residual: Vec::new(),
+        energy_hysteretic: None,
         impacts: run.impacts.len(),
         impact_times: run.impacts.iter().map(|i| i.time).collect(),
         restitution_mean: rmean,

@@ -20,6 +20,7 @@ pub mod robustness;
 pub mod stability;
 pub mod stats;
 pub mod stiffness;
+pub mod yielding;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -38,7 +39,7 @@ use crate::table::Table;
 pub const EXTRA: [&str; 1] = ["robustness"];
 
 /// All studies, in the order `--all` runs them.
-pub const NAMES: [&str; 8] = [
+pub const NAMES: [&str; 9] = [
     "paper",
     "stiffness",
     "modes",
@@ -47,6 +48,7 @@ pub const NAMES: [&str; 8] = [
     "cost",
     "stability",
     "modelform",
+    "yielding",
 ];
 
 /// Options that change the case list (kept in the manifest so a merge rebuilds the same).
@@ -156,6 +158,7 @@ pub fn study(name: &str) -> Option<&'static dyn Study> {
         "stability" => &stability::Stability,
         "modelform" => &modelform::ModelForm,
         "robustness" => &robustness::Robustness,
+        "yielding" => &yielding::Yielding,
         _ => return None,
     })
 }
