@@ -103,7 +103,12 @@ pub fn run(
         refuse_yielding(scene)?;
     }
     match method {
-        Method::Momentum => momentum::solve(scene, history),
+        Method::Momentum => momentum::solve(scene, history).map(|mut out| {
+            for (b, bd) in out.buildings.iter_mut().zip(&scene.buildings) {
+                b.drifts_from_shears(&bd.story_stiffness);
+            }
+            out
+        }),
         Method::Gap => gap::solve(scene, history),
     }
 }
