@@ -271,8 +271,8 @@ pub struct CaseOutputs {
     /// drift of yielding stories (empty when the solver does not report it).
     #[serde(default)]
     pub story_drift_residual: Vec<Vec<f64>>,
-    /// Hysteretic energy dissipated by yielding stories, J (energy audit); None when the
-    /// solver does not report it.
+    /// Hysteretic energy dissipated by yielding stories, J (energy audit; 0 for linear
+    /// buildings); None in case files written before it existed.
     #[serde(default)]
     pub energy_hysteretic: Option<f64>,
     /// Impacts (momentum) or contact episodes (gap element).
@@ -512,21 +512,33 @@ pub fn run_case(spec: &CaseSpec, studies_dir: &Path) -> CaseResult {
             .iter()
             .map(|b| b.floor_displacement_max.clone())
             .collect(),
-        // Linear stories: V = k₀ × drift, so the peak drift is V_max / k₀.
+        // The solver's peak drifts; for linear stories without them V = k₀ × drift, so the
+        // peak drift is V_max / k₀.
         story_drift_max: run
             .buildings
             .iter()
             .zip(&scene.buildings)
             .map(|(r, b)| {
-                r.story_shear_max
-                    .iter()
-                    .zip(&b.story_stiffness)
-                    .map(|(v, k)| v / k)
-                    .collect()
+                if r.story_drift_max.is_empty() {
+                    r.story_shear_max
+                        .iter()
+                        .zip(&b.story_stiffness)
+                        .map(|(v, k)| v / k)
+                        .collect()
+                } else {
+                    r.story_drift_max.clone()
+                }
             })
             .collect(),
-        story_drift_residual: Vec::new(),
-        energy_hysteretic: None,
+        story_drift_residual: if run.buildings.iter().all(|b| b.residual_drift.is_empty()) {
+            Vec::new()
+        } else {
+            run.buildings
+                .iter()
+                .map(|b| b.residual_drift.clone())
+                .collect()
+        },
+        energy_hysteretic: Some(run.energy.hysteretic),
         impacts: run.impacts.len(),
         impact_times: run.impacts.iter().map(|i| i.time).collect(),
         restitution_mean: rmean,
@@ -823,7 +835,7 @@ fn opt_e(v: Option<f64>) -> String {
     v.map(|x| format!("{x:e}")).unwrap_or_default()
 }
 
-const OUTPUT_COLUMNS: [Column; 21] = [
+const OUTPUT_COLUMNS: [Column; 22] = [
     ("impacts", |o| o.impacts.to_string()),
     ("persistent_contacts", |o| o.persistent_contacts.to_string()),
     ("restitution_mean", |o| opt_e(o.restitution_mean)),
@@ -846,6 +858,7 @@ const OUTPUT_COLUMNS: [Column; 21] = [
     ("peak_closure_m", |o| opt_e(o.peak_closure)),
     ("energy_input_J", |o| format!("{:e}", o.energy_input)),
     ("energy_contact_J", |o| format!("{:e}", o.energy_contact)),
+    ("energy_hysteretic_J", |o| opt_e(o.energy_hysteretic)),
     ("energy_balance_error_J", |o| {
         format!("{:e}", o.energy_balance_error)
     }),
@@ -865,9 +878,11 @@ const OUTPUT_COLUMNS: [Column; 21] = [
 ///   `expected_failure`, `status`, `error_kind`, `error`, the scalar outputs, `wall_s`;
 /// - `peaks.csv`: one row per finished case, building and story: `case_id`, `building`
 ///   (as named in the scene), `story` (from 1; floor `story` is its top),
-///   `story_shear_max_N`, `floor_displacement_max_m` (of floor `story`) and
+///   `story_shear_max_N`, `floor_displacement_max_m` (of floor `story`),
 ///   `amplification` (peak story shear over that of the case's run without contact,
-///   when the study ran it).
+///   when the study ran it), `story_drift_max_m` (peak |u_j − u_{j−1}|) and
+///   `residual_drift_m` (the drift at the end of the analysis, empty when the method does
+///   not report it).
 pub fn write_cases_table(study_dir: &Path, results: &Results) -> Result<()> {
     let rows: Vec<serde_json::Value> = results
         .iter()
@@ -966,8 +981,16 @@ pub fn write_cases_table(study_dir: &Path, results: &Results) -> Result<()> {
         "story_shear_max_N",
         "floor_displacement_max_m",
         "amplification",
+        "story_drift_max_m",
+        "residual_drift_m",
     ])
     .map_err(peaks_err)?;
+    let at = |v: &[Vec<f64>], b: usize, j: usize| {
+        v.get(b)
+            .and_then(|x| x.get(j))
+            .map(|x| format!("{x:e}"))
+            .unwrap_or_default()
+    };
     for r in results.iter() {
         let Some(o) = r.ok() else { continue };
         let base = (!r.spec.params.contains_key("baseline"))
@@ -995,6 +1018,8 @@ pub fn write_cases_table(study_dir: &Path, results: &Results) -> Result<()> {
                         .map(|x| format!("{x:e}"))
                         .unwrap_or_default(),
                     amp,
+                    at(&o.story_drift_max, b, j),
+                    at(&o.story_drift_residual, b, j),
                 ])
                 .map_err(peaks_err)?;
             }
