@@ -214,4 +214,8 @@ pub struct History {
     /// (constant over each held segment), 0 in free flight; its impacts are impulses
     /// (finite momentum in zero time), listed in `RunOutput::impacts`, not forces.
     pub contact_force: Vec<Vec<f64>>,
+    /// Story shears, N, one row per sample, stories in the layout of the floors (story j of
+    /// a building below its floor j): k_j (u_j − u_{j−1}) for linear stories, the story law's
+    /// force (which depends on the history, not on the drift alone) for yielding ones.
+    pub story_shear: Vec<Vec<f64>>,
 }

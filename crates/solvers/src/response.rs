@@ -17,6 +17,8 @@ pub struct ResponseTracker {
     /// Floor velocities (m/s) and contact forces (N) of the next history sample.
     vrow: Vec<f64>,
     frow: Vec<f64>,
+    /// Story shears (N) of the next history sample.
+    srow: Vec<f64>,
     /// Peak |story drift| per story, m.
     drift_max: Vec<Vec<f64>>,
     /// Yield drift F_y/k₀ per story of a yielding building (m), `None` for a linear one.
@@ -52,6 +54,7 @@ impl ResponseTracker {
             row: vec![0.0; off],
             vrow: vec![0.0; off],
             frow: vec![0.0; scene.contacts.len()],
+            srow: vec![0.0; off],
             drift_max: scene
                 .buildings
                 .iter()
@@ -76,6 +79,7 @@ impl ResponseTracker {
         self.observe_peaks_with_shear(b, u, shear);
         let off = self.offsets[b];
         self.row[off..off + u.len()].copy_from_slice(u);
+        self.srow[off..off + u.len()].copy_from_slice(&shear[..u.len()]);
     }
 
     /// [`Self::observe_peaks`] with the story shears `shear` (N) given by the story law.
@@ -105,6 +109,12 @@ impl ResponseTracker {
         self.observe_peaks(b, u);
         let off = self.offsets[b];
         self.row[off..off + u.len()].copy_from_slice(u);
+        let k = &self.stiffness[b];
+        let mut below = 0.0;
+        for (j, s) in self.srow[off..off + u.len()].iter_mut().enumerate() {
+            *s = k[j] * (u[j] - below);
+            below = u[j];
+        }
     }
 
     /// Records the floor velocities `v` (m/s) of building `b` for the next history sample.
@@ -161,6 +171,7 @@ impl ResponseTracker {
             h.displacement.push(self.row.clone());
             h.velocity.push(self.vrow.clone());
             h.contact_force.push(self.frow.clone());
+            h.story_shear.push(self.srow.clone());
         }
     }
 

@@ -165,7 +165,18 @@ fn kin(dp: &Dopri5, n: usize, l: usize, r: Option<usize>, gap: f64, th: f64) -> 
 pub(crate) fn run(
     scene: &Scene,
     sys: &System,
+    history: Option<&mut History>,
+) -> Result<RunOutput, SolverError> {
+    run_from(scene, sys, history, None)
+}
+
+/// [`run`] with the first trial step `first_step` (s) instead of Hairer's starting step when
+/// given (for tests of the step control, e.g. a first step rejected on purpose).
+pub(crate) fn run_from(
+    scene: &Scene,
+    sys: &System,
     mut history: Option<&mut History>,
+    first_step: Option<f64>,
 ) -> Result<RunOutput, SolverError> {
     let n = sys.n;
     let nc = sys.contacts.len();
@@ -248,7 +259,10 @@ pub(crate) fn run(
         let mut f =
             |tt: f64, yy: &[f64], o: &mut [f64]| rhs(sys, &stories, &seg, &modes, tt, yy, o);
         let cap0 = caps.iter().cloned().fold(f64::INFINITY, f64::min);
-        dp.initial_step(&mut f, t, &y.clone(), (bp(0) - t).min(cap0))
+        match first_step {
+            Some(h0) => h0,
+            None => dp.initial_step(&mut f, t, &y.clone(), (bp(0) - t).min(cap0)),
+        }
     };
     stats.rhs_evaluations += 1;
     let mut rejected_before = false;

@@ -63,6 +63,15 @@ pub fn solve(scene: &Scene, history: Option<&mut History>) -> Result<RunOutput, 
     Ok(out)
 }
 
+/// The adaptive integrator with a given first trial step `first_step` (s) instead of
+/// Hairer's starting step: a hook for tests of the step control (a first step far too long
+/// is rejected, and a rejected step must leave the contact and story state untouched).
+pub fn solve_adaptive_from(scene: &Scene, first_step: f64) -> Result<RunOutput, SolverError> {
+    let sys = System::new(scene)?;
+    refuse_too_long(scene, &sys)?;
+    adaptive::run_from(scene, &sys, None, Some(first_step))
+}
+
 /// Refuses, before anything is allocated, a run whose step count surely exceeds
 /// `analysis.max_steps`: Newmark needs ⌈duration / Δt⌉ steps; the explicit adaptive pair
 /// at least one step per record interval and, for stability, one per 3.3/ω_max s (the
