@@ -229,7 +229,9 @@ fn data_tables_are_tidy() {
             "story",
             "story_shear_max_N",
             "floor_displacement_max_m",
-            "amplification"
+            "amplification",
+            "story_drift_max_m",
+            "residual_drift_m"
         ]
     );
     let peaks = std::fs::read_to_string(ok_dir.join("peaks.csv")).unwrap();
@@ -246,6 +248,22 @@ fn data_tables_are_tidy() {
     for r in &with {
         let a: f64 = r[5].parse().unwrap();
         assert!(a > 0.5 && a.is_finite(), "amplification {a}");
+    }
+    // A story's peak drift is at most the peak displacement of the floor above it plus that
+    // of the floor below (|u_j − u_{j−1}| ≤ |u_j| + |u_{j−1}|, u_0 = 0), and above 0.
+    for pair in with.windows(2) {
+        let (below, r) = (pair[0], pair[1]);
+        let d: f64 = r[6].parse().unwrap();
+        let up: f64 = r[4].parse().unwrap();
+        let down: f64 = if r[2] == "1" {
+            0.0
+        } else {
+            below[4].parse().unwrap()
+        };
+        assert!(
+            d > 0.0 && d <= (up + down) * (1.0 + 1e-12),
+            "drift {d} of {r:?}"
+        );
     }
     let failed = std::fs::read_to_string(bad_dir.join("peaks.csv")).unwrap();
     assert_eq!(failed.lines().count(), 1, "failed cases have no peak rows");

@@ -279,8 +279,10 @@ fn case(ctx: &Ctx, d: &Def, st: &Strength, rec: &str, pga: f64, m: Method) -> Ca
             .with("gap_element.integrator", "adaptive")
             .with("gap_element.stiffness", format!("{:e}", d.gap_stiffness))
             .with("gap_element.tolerance", format!("{:e}", d.tolerance)),
+        // The impulse method (and any other method in physical coordinates) reads the
+        // adaptive stepper's tolerance from `gap_element.tolerance`.
         #[allow(unreachable_patterns)]
-        _ => c,
+        _ => c.with("gap_element.tolerance", format!("{:e}", d.tolerance)),
     }
 }
 
