@@ -6,8 +6,8 @@
 //! engine, then (unless sharded) reads the case files back and writes
 //! `<out>/<study>/{cases.csv,cases.json,*.csv,*.md,*.png,*.svg,summary.md}`.
 //!
-//! Outputs whose name contains `cpu` (and `cost/summary.md`, and the `cases*` files) hold
-//! wall-clock times; everything else is deterministic.
+//! Outputs whose name contains `cpu` (and `cost/summary.md`, `yielding/summary.md`, and the
+//! `cases*` files) hold wall-clock times; everything else is deterministic.
 
 pub mod cost;
 pub mod gap;
