@@ -65,7 +65,7 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
-    /// Run one analysis of a scene with either method.
+    /// Run one analysis of a scene with one method (momentum, gap or impulse).
     Run {
         /// Scene file (TOML).
         scene: PathBuf,

@@ -59,7 +59,15 @@
 //! [`crate::momentum::persistent`]) and locates the release on that piecewise trajectory;
 //! here λ(t) is the exact instantaneous constraint force. The two held motions differ by
 //! the momentum method's discretisation of λ (second order in its step), so on scenes with
-//! persistent contact the answers agree to that order, not to the tolerance.
+//! persistent contact the answers agree to that order, not to the tolerance. The momentum
+//! method also judges the sign of the holding force at its segment ends only: a tensile
+//! excursion shorter than a segment (a brief release followed by a slow re-impact) is
+//! missed there and found here, where λ is sampled four times per adaptive step; with its
+//! step refined the momentum method finds it too (aligned paper scene, c_r = 0).
+//! Event location uses the dense output, not the closed form: each step is searched in four
+//! windows; the explicit pair's stability keeps a step below 3.3/ω_max, so a window is
+//! below T_min/7.6 and holds at most one extremum of a gap function, as the momentum
+//! method's T_min/8 windows do.
 //!
 //! **Options**: `gap_element.tolerance` (the step error tolerance, default 1e-8),
 //! `momentum.persistent_contact`, `momentum.capture_velocity`, the contacts' `gap` and
