@@ -103,9 +103,34 @@ pub fn run(
     method: Method,
     history: Option<&mut History>,
 ) -> Result<RunOutput, SolverError> {
+    if method == Method::Momentum {
+        refuse_yielding(scene)?;
+    }
     match method {
-        Method::Momentum => momentum::solve(scene, history),
+        Method::Momentum => momentum::solve(scene, history).map(|mut out| {
+            for (b, bd) in out.buildings.iter_mut().zip(&scene.buildings) {
+                b.drifts_from_shears(&bd.story_stiffness);
+            }
+            out
+        }),
         Method::Gap => gap::solve(scene, history),
         Method::Impulse => impulse::solve(scene, history),
+    }
+}
+
+/// The momentum method superposes the modes of linear buildings (the paper's eq. 5 takes M
+/// and K constant): a scene with yielding stories is refused, naming the building and the
+/// methods that apply.
+pub fn refuse_yielding(scene: &Scene) -> Result<(), SolverError> {
+    match scene.buildings.iter().find(|b| b.story_law.is_yielding()) {
+        None => Ok(()),
+        Some(b) => Err(SolverError::Refused {
+            reason: format!(
+                "building `{}` has yielding stories (story_law = \"bilinear\"): the momentum \
+                 method superposes the modes of linear buildings and does not apply; use \
+                 --method gap (adaptive or newmark) or --method impulse",
+                b.name
+            ),
+        }),
     }
 }

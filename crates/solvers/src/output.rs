@@ -3,13 +3,45 @@
 use serde::Serialize;
 
 /// Peak responses of one building.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Default)]
 pub struct BuildingResponse {
     pub name: String,
-    /// Peak |story shear| per story, N, story 1 first (V_j = k_j (u_j − u_{j−1})).
+    /// Peak |story shear| per story, N, story 1 first (V_j = k_j (u_j − u_{j−1}) for linear
+    /// stories; the story law's force for yielding ones).
     pub story_shear_max: Vec<f64>,
     /// Peak |floor displacement| relative to the ground, m, floor 1 first.
     pub floor_displacement_max: Vec<f64>,
+    /// Peak |story drift| |u_j − u_{j−1}| per story, m, story 1 first.
+    pub story_drift_max: Vec<f64>,
+    /// Story drift u_j − u_{j−1} at the end of the analysis, m, story 1 first (signed; the
+    /// permanent set of a yielded story once the motion has died out). Empty for the
+    /// momentum method.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub residual_drift: Vec<f64>,
+    /// Ductility demand per story, peak drift / yield drift F_y/k₀ (dimensionless; > 1 when
+    /// the story yielded); only for a building with `story_law = "bilinear"`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ductility: Option<Vec<f64>>,
+    /// Energy dissipated by yielding in this building's stories, J (plastic work less the
+    /// hardening energy still stored); only for a building with `story_law = "bilinear"`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub hysteretic_energy: Option<f64>,
+}
+
+impl BuildingResponse {
+    /// Fills `story_drift_max` of a linear building from its peak shears: |d_j| = |V_j|/k_j
+    /// at every instant, so the peaks are at the same instants (methods that track shears
+    /// only, such as the momentum method).
+    pub fn drifts_from_shears(&mut self, story_stiffness: &[f64]) {
+        if self.story_drift_max.is_empty() {
+            self.story_drift_max = self
+                .story_shear_max
+                .iter()
+                .zip(story_stiffness)
+                .map(|(v, k)| v / k)
+                .collect();
+        }
+    }
 }
 
 /// One impact (momentum method) or one contact episode (gap element).
@@ -55,7 +87,7 @@ pub struct PersistentContact {
     pub released_by: String,
 }
 
-/// Energy audit, J. balance_error = initial + input − damping − contact − final.
+/// Energy audit, J. balance_error = initial + input − damping − contact − hysteretic − final.
 #[derive(Debug, Clone, PartialEq, Serialize, Default)]
 pub struct EnergyAudit {
     /// Kinetic + strain energy at the start (relative motion).
@@ -66,10 +98,14 @@ pub struct EnergyAudit {
     pub damping: f64,
     /// Lost in impacts (momentum) or dissipated by the contact element (gap element).
     pub contact: f64,
-    /// Kinetic + strain energy at the end (plus energy stored in contact springs).
+    /// Dissipated by yielding stories: plastic work ∫ V du_p less the energy ½ α²/H still
+    /// stored in the hardening springs (0 for linear buildings).
+    pub hysteretic: f64,
+    /// Kinetic + recoverable strain energy at the end (plus energy stored in contact
+    /// springs); a yielding story holds ½ k₀ (d − u_p)² + ½ α²/H.
     #[serde(rename = "final")]
     pub final_: f64,
-    /// initial + input − damping − contact − final.
+    /// initial + input − damping − contact − hysteretic − final.
     pub balance_error: f64,
 }
 
@@ -119,6 +155,8 @@ pub struct Stats {
     pub impacts: u64,
     /// Root-finder iterations spent locating events.
     pub root_iterations: u64,
+    /// Located kinks of yielding stories (yield and unloading), adaptive gap element.
+    pub story_kinks: u64,
     /// Newton iterations (Newmark).
     pub newton_iterations: u64,
     /// Newmark: extra Newton solves because a contact's state (carrying force or not)
@@ -176,4 +214,8 @@ pub struct History {
     /// (constant over each held segment), 0 in free flight; its impacts are impulses
     /// (finite momentum in zero time), listed in `RunOutput::impacts`, not forces.
     pub contact_force: Vec<Vec<f64>>,
+    /// Story shears, N, one row per sample, stories in the layout of the floors (story j of
+    /// a building below its floor j): k_j (u_j − u_{j−1}) for linear stories, the story law's
+    /// force (which depends on the history, not on the drift alone) for yielding ones.
+    pub story_shear: Vec<Vec<f64>>,
 }

@@ -17,6 +17,12 @@ pub struct ResponseTracker {
     /// Floor velocities (m/s) and contact forces (N) of the next history sample.
     vrow: Vec<f64>,
     frow: Vec<f64>,
+    /// Story shears (N) of the next history sample.
+    srow: Vec<f64>,
+    /// Peak |story drift| per story, m.
+    drift_max: Vec<Vec<f64>>,
+    /// Yield drift F_y/k₀ per story of a yielding building (m), `None` for a linear one.
+    yield_drift: Vec<Option<Vec<f64>>>,
 }
 
 impl ResponseTracker {
@@ -48,7 +54,53 @@ impl ResponseTracker {
             row: vec![0.0; off],
             vrow: vec![0.0; off],
             frow: vec![0.0; scene.contacts.len()],
+            srow: vec![0.0; off],
+            drift_max: scene
+                .buildings
+                .iter()
+                .map(|b| vec![0.0; b.n_floors()])
+                .collect(),
+            yield_drift: scene
+                .buildings
+                .iter()
+                .map(|b| {
+                    b.story_law
+                        .bilinear_params(&b.story_stiffness)
+                        .map(|p| p.iter().map(|p| p.yield_drift()).collect())
+                })
+                .collect(),
         }
+    }
+
+    /// Records the floor displacements `u` (m) of building `b` at one instant, with the
+    /// story shears `shear` (N) given by the story law (a yielding building).
+    #[inline]
+    pub fn observe_with_shear(&mut self, b: usize, u: &[f64], shear: &[f64]) {
+        self.observe_peaks_with_shear(b, u, shear);
+        let off = self.offsets[b];
+        self.row[off..off + u.len()].copy_from_slice(u);
+        self.srow[off..off + u.len()].copy_from_slice(&shear[..u.len()]);
+    }
+
+    /// [`Self::observe_peaks`] with the story shears `shear` (N) given by the story law.
+    #[inline]
+    pub fn observe_peaks_with_shear(&mut self, b: usize, u: &[f64], shear: &[f64]) {
+        let vmax = &mut self.shear_max[b];
+        let dmax = &mut self.disp_max[b];
+        let drmax = &mut self.drift_max[b];
+        let mut below = 0.0;
+        for j in 0..u.len() {
+            vmax[j] = vmax[j].max(shear[j].abs());
+            dmax[j] = dmax[j].max(u[j].abs());
+            drmax[j] = drmax[j].max((u[j] - below).abs());
+            below = u[j];
+        }
+    }
+
+    /// Current peak |story drift| (m) of story `j` of building `b`.
+    #[inline]
+    pub fn peak_drift(&self, b: usize, j: usize) -> f64 {
+        self.drift_max[b][j]
     }
 
     /// Records the floor displacements `u` (m) of building `b` at one instant.
@@ -57,6 +109,12 @@ impl ResponseTracker {
         self.observe_peaks(b, u);
         let off = self.offsets[b];
         self.row[off..off + u.len()].copy_from_slice(u);
+        let k = &self.stiffness[b];
+        let mut below = 0.0;
+        for (j, s) in self.srow[off..off + u.len()].iter_mut().enumerate() {
+            *s = k[j] * (u[j] - below);
+            below = u[j];
+        }
     }
 
     /// Records the floor velocities `v` (m/s) of building `b` for the next history sample.
@@ -80,8 +138,13 @@ impl ResponseTracker {
         let k = &self.stiffness[b];
         let vmax = &mut self.shear_max[b];
         let dmax = &mut self.disp_max[b];
+        let drmax = &mut self.drift_max[b];
         let mut below = 0.0;
         for j in 0..u.len() {
+            let dr = (u[j] - below).abs();
+            if dr > drmax[j] {
+                drmax[j] = dr;
+            }
             let v = (k[j] * (u[j] - below)).abs();
             if v > vmax[j] {
                 vmax[j] = v;
@@ -108,20 +171,48 @@ impl ResponseTracker {
             h.displacement.push(self.row.clone());
             h.velocity.push(self.vrow.clone());
             h.contact_force.push(self.frow.clone());
+            h.story_shear.push(self.srow.clone());
         }
     }
 
-    /// The peaks, per building.
+    /// The peaks, per building; the residual drift is the drift of the last observed
+    /// instant (the end of the analysis: every solver observes it), the ductility demand
+    /// the peak drift over the yield drift (yielding buildings).
     pub fn finish(self) -> Vec<BuildingResponse> {
+        let row = self.row;
         self.names
             .into_iter()
             .zip(self.shear_max)
             .zip(self.disp_max)
+            .zip(self.drift_max)
+            .zip(self.yield_drift)
+            .zip(self.offsets)
             .map(
-                |((name, story_shear_max), floor_displacement_max)| BuildingResponse {
-                    name,
-                    story_shear_max,
-                    floor_displacement_max,
+                |(
+                    ((((name, story_shear_max), floor_displacement_max), story_drift_max), yd),
+                    off,
+                )| {
+                    let n = story_drift_max.len();
+                    let u = &row[off..off + n];
+                    let residual_drift = (0..n)
+                        .map(|j| u[j] - if j > 0 { u[j - 1] } else { 0.0 })
+                        .collect();
+                    let ductility = yd.map(|yd| {
+                        story_drift_max
+                            .iter()
+                            .zip(&yd)
+                            .map(|(d, y)| d / y)
+                            .collect()
+                    });
+                    BuildingResponse {
+                        name,
+                        story_shear_max,
+                        floor_displacement_max,
+                        story_drift_max,
+                        residual_drift,
+                        ductility,
+                        hysteretic_energy: None,
+                    }
                 },
             )
             .collect()

@@ -15,7 +15,7 @@ use serde::Deserialize;
 
 use crate::ground::{GroundMotion, RecordError, RecordFormat, Units};
 use crate::model::{
-    calibrate_first_frequency, calibrate_two_frequencies, Building, Damping, ModelError,
+    calibrate_first_frequency, calibrate_two_frequencies, Building, Damping, ModelError, StoryLaw,
 };
 
 /// Errors from reading, overriding or validating a scene.
@@ -372,7 +372,7 @@ struct RawScene {
 #[derive(Deserialize)]
 #[serde(
     deny_unknown_fields,
-    expecting = "a building table (keys name, masses or stories and mass, story_stiffness or target_frequencies_hz, damping_ratio, story_height, ...)"
+    expecting = "a building table (keys name, masses or stories and mass, story_stiffness or target_frequencies_hz, damping_ratio, story_height, story_law, yield_shear, hardening_ratio, ...)"
 )]
 struct RawBuilding {
     name: String,
@@ -390,6 +390,12 @@ struct RawBuilding {
     initial_displacement: Option<Vec<f64>>,
     initial_velocity: Option<Vec<f64>>,
     story_height: Option<ScalarOrList>,
+    /// "linear" (default) or "bilinear".
+    story_law: Option<String>,
+    /// Yield shear, N, per story or one for all (bilinear stories).
+    yield_shear: Option<ScalarOrList>,
+    /// Post-yield stiffness over the elastic one (bilinear stories), default 0.02.
+    hardening_ratio: Option<f64>,
 }
 
 #[derive(Deserialize)]
@@ -838,7 +844,11 @@ fn validate(raw: RawScene, origin: &str, base_dir: &Path) -> Result<Scene, Scene
                 format!("{k}: expected a finite stiffness > 0 (N/m)"),
             ));
         }
+        let story_law =
+            parse_story_law(&rb.story_law, &rb.yield_shear, rb.hardening_ratio, n, &key)
+                .map_err(|(k, m)| invalid(k, m))?;
         let mut b = Building {
+            story_law,
             name: rb.name.clone(),
             masses,
             story_stiffness: stiffness,
@@ -1376,4 +1386,81 @@ fn validate(raw: RawScene, origin: &str, base_dir: &Path) -> Result<Scene, Scene
         gap_element: gap,
         limits,
     })
+}
+
+/// The story law of a building from its keys `story_law`, `yield_shear` (N, one for every
+/// story or one per story) and `hardening_ratio` (default
+/// [`crate::model::story_law::DEFAULT_HARDENING_RATIO`]); `key` names a key of the building.
+/// An error is (key, message).
+fn parse_story_law(
+    law: &Option<String>,
+    yield_shear: &Option<ScalarOrList>,
+    hardening_ratio: Option<f64>,
+    n: usize,
+    key: &dyn Fn(&str) -> String,
+) -> Result<StoryLaw, (String, String)> {
+    match law.as_deref() {
+        None | Some("linear") => {
+            for (k, given) in [
+                ("yield_shear", yield_shear.is_some()),
+                ("hardening_ratio", hardening_ratio.is_some()),
+            ] {
+                if given {
+                    return Err((
+                        key(k),
+                        "applies to yielding stories: give it with `story_law = \"bilinear\"`"
+                            .into(),
+                    ));
+                }
+            }
+            Ok(StoryLaw::Linear)
+        }
+        Some("bilinear") => {
+            let fy = match yield_shear {
+                None => {
+                    return Err((
+                        key("yield_shear"),
+                        "missing: `story_law = \"bilinear\"` needs the yield shear of every story (N), one number for all or one per story".into(),
+                    ))
+                }
+                Some(ScalarOrList::Scalar(f)) => vec![*f; n],
+                Some(ScalarOrList::List(fs)) if fs.len() == n => fs.clone(),
+                Some(ScalarOrList::List(fs)) => {
+                    return Err((
+                        key("yield_shear"),
+                        format!(
+                            "has {} values, expected {n} (one per story, story 1 first), or a \
+                             single number for every story",
+                            fs.len()
+                        ),
+                    ))
+                }
+            };
+            if let Some((i, f)) = fy
+                .iter()
+                .enumerate()
+                .find(|(_, f)| !(f.is_finite() && **f > 0.0))
+            {
+                return Err((
+                    format!("{}[{i}]", key("yield_shear")),
+                    format!("{f}: expected a finite yield shear > 0 (N)"),
+                ));
+            }
+            let b = hardening_ratio.unwrap_or(crate::model::story_law::DEFAULT_HARDENING_RATIO);
+            if !(b.is_finite() && (0.0..1.0).contains(&b)) {
+                return Err((
+                    key("hardening_ratio"),
+                    format!("{b}: expected a post-yield stiffness ratio in [0, 1)"),
+                ));
+            }
+            Ok(StoryLaw::Bilinear {
+                yield_shear: fy,
+                hardening_ratio: b,
+            })
+        }
+        Some(other) => Err((
+            key("story_law"),
+            format!("`{other}`: expected \"linear\" or \"bilinear\""),
+        )),
+    }
 }

@@ -12,6 +12,13 @@
 //!   fixed ground node and one node per floor carrying the lumped floor mass; story `j` is a
 //!   `zeroLength` element (`-dir 1`) from the node below to floor `j` with a uniaxial
 //!   `Elastic` material of stiffness `k_j`. All nodes sit at x = 0 (zero-length elements).
+//!   A building with `story_law = "bilinear"` gets `Steel01(F_y, k_j, b)` instead (yield
+//!   shear F_y in N, elastic stiffness E0 = k_j in N/m, hardening ratio b): the bilinear law
+//!   with kinematic hardening of pound's story law (Steel01's isotropic-hardening
+//!   parameters a1…a4 are left at their defaults, a1 = a3 = 0: none). Its trial answer is
+//!   the elastic predictor from the committed state clamped to the hardening lines
+//!   V = ±(1 − b) F_y + b k₀ d, the same return mapping as pound's, and pound's damping
+//!   matrix stays the elastic building's, as the modal damping here.
 //! - Damping: classical modal damping C = M Φ diag(2ζω) Φᵀ M, the matrix both pound solvers
 //!   use, through OpenSees' `modalDamping` after `eigen('-fullGenLapack', N)` with *all* N
 //!   modes of the model. The buildings are uncoupled when the eigen analysis runs (contacts
@@ -44,7 +51,10 @@
 //!   number of steps spans the duration), `NormDispIncr` test. Initial conditions through
 //!   `setNodeDisp`/`setNodeVel`, with the consistent initial acceleration set explicitly.
 //! - Outputs: tracked in Python as pound's Newmark does: floor displacements (`nodeDisp`),
-//!   story shears k_j (u_j − u_{j−1}) and their peaks at every step, as pound's Newmark; a contact
+//!   story shears k_j (u_j − u_{j−1}) (a bilinear story: the element's basic force, i.e. the
+//!   Steel01 stress), story drifts and their peaks at every step, as pound's Newmark, the
+//!   drifts at the end (`residual_drift`) and, for a bilinear building, the ductility
+//!   demand (peak drift / (F_y/k_j)); a contact
 //!   episode starts at the first step whose contact element carries a force and ends at the
 //!   first step where it carries none (times, relative velocities, impulse, peak force and
 //!   penetration as in `pound run`).
@@ -227,7 +237,8 @@ Needs openseespy (pip install openseespy). Writes the `pound run --out` JSON lay
 path given as the first argument. Compare with
     pound run SCENE --method gap --set gap_element.integrator=newmark --out pound.json
 
-Model: zeroLength story springs (uniaxial Elastic), lumped floor masses, classical modal
+Model: zeroLength story springs (uniaxial Elastic; Steel01 for bilinear stories), lumped
+floor masses, classical modal
 damping C = M Phi diag(2 zeta omega) Phi^T M through modalDamping over all modes, the
 contacts as zeroLength gap elements (ElasticPPGap for the linear law, ViscoelasticGap for
 Kelvin-Voigt), UniformExcitation from the embedded record, Newmark average acceleration
@@ -284,6 +295,24 @@ SETTINGS = {settings_lit}
             "        \"story_stiffness\": {},  # N/m",
             list(&b.story_stiffness, 4, 8)
         );
+        match b.story_law.bilinear_params(&b.story_stiffness) {
+            Some(p) => {
+                let fy: Vec<f64> = p.iter().map(|p| p.yield_shear).collect();
+                let _ = writeln!(
+                    s,
+                    "        \"yield_shear\": {},  # N (Steel01 Fy)",
+                    list(&fy, 4, 8)
+                );
+                let _ = writeln!(
+                    s,
+                    "        \"hardening_ratio\": {},  # Steel01 b",
+                    num(p.first().map_or(0.0, |p| p.hardening_ratio))
+                );
+            }
+            None => {
+                let _ = writeln!(s, "        \"yield_shear\": None,  # linear stories");
+            }
+        }
         let _ = writeln!(
             s,
             "        \"initial_displacement\": {},  # m",
@@ -394,12 +423,17 @@ def build():
         ops.fix(ground, 1)
         below = ground
         nodes = []
-        for m, k in zip(b["masses"], b["story_stiffness"]):
+        for j, (m, k) in enumerate(zip(b["masses"], b["story_stiffness"])):
             tag += 1
             ops.node(tag, 0.0)
             ops.mass(tag, m)
             # The story below this floor: node, material and element share the tag.
-            ops.uniaxialMaterial('Elastic', tag, k)
+            if b["yield_shear"] is None:
+                ops.uniaxialMaterial('Elastic', tag, k)
+            else:
+                # Bilinear story: Steel01(Fy, E0, b), kinematic hardening only (a1..a4
+                # left at their defaults: no isotropic hardening).
+                ops.uniaxialMaterial('Steel01', tag, b["yield_shear"][j], k, b["hardening_ratio"])
             ops.element('zeroLength', tag, below, tag, '-mat', tag, '-dir', 1)
             nodes.append(tag)
             below = tag
@@ -465,16 +499,26 @@ def initial_conditions(floors, omega, phi):
     u0 = [x for b in BUILDINGS for x in b["initial_displacement"]]
     v0 = [x for b in BUILDINGS for x in b["initial_velocity"]]
     nodes = [t for fl in floors for t in fl]
-    # K u0 in story form.
+    # Story forces at u0 in story form (a bilinear story answers from its virgin state:
+    # beyond the yield drift on the hardening line).
     ku = []
     for b in BUILDINGS:
         u = b["initial_displacement"]
         k = b["story_stiffness"]
         n = len(u)
-        for j in range(n):
+
+        def story(j):
             f = k[j] * (u[j] - (u[j - 1] if j > 0 else 0.0))
+            if b["yield_shear"] is not None:
+                fy, hb = b["yield_shear"][j], b["hardening_ratio"]
+                if abs(f) > fy:
+                    f = math.copysign(fy + hb * (abs(f) - fy), f)
+            return f
+
+        for j in range(n):
+            f = story(j)
             if j + 1 < n:
-                f -= k[j + 1] * (u[j + 1] - u[j])
+                f -= story(j + 1)
             ku.append(f)
     # C v0 = M Phi diag(2 zeta omega) Phi^T M v0.
     mv = [m * v for m, v in zip(masses, v0)]
@@ -518,6 +562,8 @@ class Tracker:
         self.contact_tags = contact_tags
         self.disp_max = [[0.0] * len(nodes) for nodes in floors]
         self.shear_max = [[0.0] * len(nodes) for nodes in floors]
+        self.drift_max = [[0.0] * len(nodes) for nodes in floors]
+        self.drift = [[0.0] * len(nodes) for nodes in floors]
         n = len(CONTACTS)
         self.active = [False] * n
         self.force = [0.0] * n
@@ -546,8 +592,14 @@ class Tracker:
             for j, t in enumerate(nodes):
                 u = ops.nodeDisp(t, 1)
                 self.disp_max[bi][j] = max(self.disp_max[bi][j], abs(u))
-                v = b["story_stiffness"][j] * (u - below)
+                if b["yield_shear"] is None:
+                    v = b["story_stiffness"][j] * (u - below)
+                else:
+                    # The story element (same tag as its floor node): Steel01's force.
+                    v = ops.basicForce(t)[0]
                 self.shear_max[bi][j] = max(self.shear_max[bi][j], abs(v))
+                self.drift[bi][j] = u - below
+                self.drift_max[bi][j] = max(self.drift_max[bi][j], abs(u - below))
                 below = u
 
     def start(self):
@@ -645,15 +697,26 @@ def main():
         tracker.step(t1, DT, step % PEAK_STRIDE == 0 or step == N_STEPS)
     tracker.finish(DURATION)
 
+    def building_result(bi):
+        b = BUILDINGS[bi]
+        r = {
+            "name": b["name"],
+            "story_shear_max": tracker.shear_max[bi],
+            "floor_displacement_max": tracker.disp_max[bi],
+            "story_drift_max": tracker.drift_max[bi],
+            "residual_drift": tracker.drift[bi],
+        }
+        if b["yield_shear"] is not None:
+            r["ductility"] = [d / (fy / k) for d, fy, k in
+                              zip(tracker.drift_max[bi], b["yield_shear"], b["story_stiffness"])]
+        return r
+
     result = {
         "method": "opensees",
         "settings": SETTINGS,
         "scene": SCENE,
         "duration": DURATION,
-        "buildings": [
-            {"name": b["name"], "story_shear_max": s, "floor_displacement_max": d}
-            for b, s, d in zip(BUILDINGS, tracker.shear_max, tracker.disp_max)
-        ],
+        "buildings": [building_result(bi) for bi in range(len(BUILDINGS))],
         "impacts": tracker.impacts,
         "persistent_contacts": [],
         "stats": {

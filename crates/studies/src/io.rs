@@ -74,14 +74,15 @@ pub fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<(), Out
 /// `time_s`; the ground acceleration `ground_a_m_per_s2`; floor displacements relative to the ground `<building>_u<floor>_m`; floor
 /// velocities `<building>_v<floor>_m_per_s`; absolute floor accelerations
 /// `<building>_a<floor>_abs_m_per_s2` from each floor's equilibrium,
-/// a = M⁻¹ (f_contact − C u̇ − K u) (exact for the gap element and for the momentum method
+/// a = M⁻¹ (f_contact − C u̇ − f_s) with the story forces f_s (K u for linear stories) (exact for the gap element and for the momentum method
 /// with all modes; with fewer modes the equilibrium acceleration of the reconstructed
 /// motion, and at an impact instant the regular part only, the impulse being in the JSON);
 /// inter-story drifts `<building>_drift<story>_m` = u_j − u_{j−1}; drift ratios
 /// `<building>_drift_ratio<story>` = (u_j − u_{j−1}) / h_j (dimensionless; only for buildings
 /// whose scene entry gives `story_height`); story shears
-/// `<building>_V<story>_N` = k_j (u_j − u_{j−1}); contact forces `contact<i>_force_N`
-/// (compressive > 0).
+/// `<building>_V<story>_N` = k_j (u_j − u_{j−1}) (a yielding building: the story law's force,
+/// as recorded by the solver, which the accelerations use too); contact forces
+/// `contact<i>_force_N` (compressive > 0).
 pub fn history_csv(scene: &Scene, history: &History) -> Result<String, OutputError> {
     let csv_err = |e: csv::Error| OutputError::Io {
         path: "history".into(),
@@ -149,6 +150,14 @@ pub fn history_csv(scene: &Scene, history: &History) -> Result<String, OutputErr
             off += b.n_floors();
         }
         let floors = |b: usize| offsets[b]..offsets[b] + scene.buildings[b].n_floors();
+        // Story shears recorded by the solver (the law's for yielding stories), else k·drift.
+        let recorded = history.story_shear.get(s).filter(|r| r.len() == u.len());
+        let shears = |bi: usize| -> Vec<f64> {
+            match recorded {
+                Some(r) => r[floors(bi)].to_vec(),
+                None => scene.buildings[bi].story_shears(&u[floors(bi)]),
+            }
+        };
         row.extend(u.iter().map(|&x| fmt(x)));
         if v.len() == u.len() {
             row.extend(v.iter().map(|&x| fmt(x)));
@@ -161,11 +170,21 @@ pub fn history_csv(scene: &Scene, history: &History) -> Result<String, OutputErr
             let r = floors(bi);
             let (ub, vb) = (&u[r.clone()], v.get(r.clone()));
             let mut f = vec![0.0; n];
-            for (j, fj) in f.iter_mut().enumerate() {
-                let below = if j > 0 { ub[j - 1] } else { 0.0 };
-                *fj -= b.story_stiffness[j] * (ub[j] - below);
-                if j + 1 < n {
-                    *fj += b.story_stiffness[j + 1] * (ub[j + 1] - ub[j]);
+            if b.story_law.is_yielding() {
+                let v = shears(bi);
+                for (j, fj) in f.iter_mut().enumerate() {
+                    *fj -= v[j];
+                    if j + 1 < n {
+                        *fj += v[j + 1];
+                    }
+                }
+            } else {
+                for (j, fj) in f.iter_mut().enumerate() {
+                    let below = if j > 0 { ub[j - 1] } else { 0.0 };
+                    *fj -= b.story_stiffness[j] * (ub[j] - below);
+                    if j + 1 < n {
+                        *fj += b.story_stiffness[j + 1] * (ub[j + 1] - ub[j]);
+                    }
                 }
             }
             match (vb, &damping[bi]) {
@@ -213,7 +232,11 @@ pub fn history_csv(scene: &Scene, history: &History) -> Result<String, OutputErr
             }
         }
         for (bi, b) in scene.buildings.iter().enumerate() {
-            row.extend(b.story_shears(&u[floors(bi)]).into_iter().map(fmt));
+            if b.story_law.is_yielding() {
+                row.extend(shears(bi).into_iter().map(fmt));
+            } else {
+                row.extend(b.story_shears(&u[floors(bi)]).into_iter().map(fmt));
+            }
         }
         if fc.len() == nc {
             row.extend(fc.iter().map(|&x| fmt(x)));

@@ -213,22 +213,39 @@ pub fn run_summary(scene: &Scene, run: &RunOutput, amplification: Option<&[Vec<f
     );
     for (bi, b) in run.buildings.iter().enumerate() {
         let amp = amplification.and_then(|a| a.get(bi));
+        let mu = b.ductility.as_deref();
         s.push_str(&format!(
-            "{}\n  story  shear max (MN)  floor disp max (m){}\n",
+            "{}\n  story  shear max (MN)  floor disp max (m)  drift max (m){}{}\n",
             b.name,
+            if mu.is_some() {
+                "  ductility  residual drift (m)"
+            } else {
+                ""
+            },
             if amp.is_some() { "  amplification" } else { "" }
         ));
         for j in (0..b.story_shear_max.len()).rev() {
             s.push_str(&format!(
-                "  {:5} {:16.4} {:19.5}",
+                "  {:5} {:16.4} {:19.5} {:14.5}",
                 j + 1,
                 b.story_shear_max[j] / 1e6,
-                b.floor_displacement_max[j]
+                b.floor_displacement_max[j],
+                b.story_drift_max.get(j).copied().unwrap_or(f64::NAN)
             ));
+            if let Some(mu) = mu {
+                s.push_str(&format!(
+                    " {:10.3} {:18.5}",
+                    mu[j],
+                    b.residual_drift.get(j).copied().unwrap_or(f64::NAN)
+                ));
+            }
             if let Some(a) = amp {
                 s.push_str(&format!(" {:14.3}", a[j]));
             }
             s.push('\n');
+        }
+        if let Some(eh) = b.hysteretic_energy {
+            s.push_str(&format!("  hysteretic energy (J): {eh:.4e}\n"));
         }
     }
     s.push_str(&format!("impacts: {}", run.impacts.len()));
@@ -248,16 +265,21 @@ pub fn run_summary(scene: &Scene, run: &RunOutput, amplification: Option<&[Vec<f
     s.push_str(&overlap_lines(run));
     let e = &run.energy;
     s.push_str(&format!(
-        "energy (J): initial {:.4e}, input {:.4e}, damping {:.4e}, contact {:.4e}, final {:.4e}, balance error {:.3e}\n",
-        e.initial, e.input, e.damping, e.contact, e.final_, e.balance_error
+        "energy (J): initial {:.4e}, input {:.4e}, damping {:.4e}, contact {:.4e}, hysteretic {:.4e}, final {:.4e}, balance error {:.3e}\n",
+        e.initial, e.input, e.damping, e.contact, e.hysteretic, e.final_, e.balance_error
     ));
     let st = &run.stats;
     s.push_str(&format!(
-        "stats: {} steps ({} rejected), {} events, {} impacts, {} root iterations, {:.3} ms\n",
+        "stats: {} steps ({} rejected), {} events, {} impacts, {}{} root iterations, {:.3} ms\n",
         st.steps,
         st.rejected_steps,
         st.events,
         st.impacts,
+        if st.story_kinks > 0 {
+            format!("{} story kinks, ", st.story_kinks)
+        } else {
+            String::new()
+        },
         st.root_iterations,
         st.wall_seconds * 1e3
     ));
@@ -340,6 +362,15 @@ pub fn resolved_scene(scene: &Scene) -> serde_json::Value {
             });
             if let Some(Some(h)) = scene.story_heights.get(bi) {
                 v["story_height"] = serde_json::json!(h);
+            }
+            if let structure::model::StoryLaw::Bilinear {
+                yield_shear,
+                hardening_ratio,
+            } = &b.story_law
+            {
+                v["story_law"] = serde_json::json!("bilinear");
+                v["yield_shear"] = serde_json::json!(yield_shear);
+                v["hardening_ratio"] = serde_json::json!(hardening_ratio);
             }
             v
         })

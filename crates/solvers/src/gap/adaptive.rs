@@ -25,6 +25,7 @@ use roots::Convergency;
 use structure::Scene;
 
 use super::dopri::Dopri5;
+use super::stories::{Kink, Stories};
 use super::{audit, output, Episode, Mode, Segment, System};
 use crate::response::ResponseTracker;
 use crate::{History, Impact, RunOutput, SolverError, Stats};
@@ -54,7 +55,7 @@ impl Convergency<f64> for Conv {
 }
 
 /// Brent on [a, b]; `calls` counts evaluations. Without a sign change returns `a`.
-fn locate(mut f: impl FnMut(f64) -> f64, a: f64, b: f64, calls: &mut u64) -> f64 {
+pub(crate) fn locate(mut f: impl FnMut(f64) -> f64, a: f64, b: f64, calls: &mut u64) -> f64 {
     let mut conv = Conv {
         xtol: THETA_TOL,
         max_iter: 200,
@@ -70,16 +71,24 @@ fn locate(mut f: impl FnMut(f64) -> f64, a: f64, b: f64, calls: &mut u64) -> f64
     }
 }
 
-/// Right-hand side with the contact modes frozen.
+/// Right-hand side with the contact modes and the committed story state frozen.
 #[inline]
-fn rhs(sys: &System, seg: &Segment, modes: &[Mode], t: f64, y: &[f64], o: &mut [f64]) {
+fn rhs(
+    sys: &System,
+    stories: &Stories,
+    seg: &Segment,
+    modes: &[Mode],
+    t: f64,
+    y: &[f64],
+    o: &mut [f64],
+) {
     let n = sys.n;
     let (u, rest) = y.split_at(n);
     let v = &rest[..n];
     let (ou, orest) = o.split_at_mut(n);
     ou.copy_from_slice(v);
     let (acc, extra) = orest.split_at_mut(n);
-    let pdamp = sys.internal(u, v, acc);
+    let pdamp = sys.internal(stories, u, v, acc);
     let ag = seg.at(t);
     let mut pin = 0.0;
     for i in 0..n {
@@ -111,10 +120,17 @@ fn rhs(sys: &System, seg: &Segment, modes: &[Mode], t: f64, y: &[f64], o: &mut [
 
 /// Observes the state `y` for peaks and, when a history is kept, for its next sample (with
 /// the contact forces of the closed contacts).
-fn observe(sys: &System, tracker: &mut ResponseTracker, modes: &[Mode], y: &[f64], history: bool) {
+fn observe(
+    sys: &System,
+    stories: &Stories,
+    tracker: &mut ResponseTracker,
+    modes: &[Mode],
+    y: &[f64],
+    history: bool,
+) {
     let n = sys.n;
     if !history {
-        sys.observe(tracker, &y[..n]);
+        sys.observe(stories, tracker, &y[..n]);
         return;
     }
     let (u, v) = (&y[..n], &y[n..2 * n]);
@@ -130,7 +146,7 @@ fn observe(sys: &System, tracker: &mut ResponseTracker, modes: &[Mode], y: &[f64
             }
         })
         .collect();
-    sys.observe_sample(tracker, u, v, &forces);
+    sys.observe_sample(stories, tracker, u, v, &forces);
 }
 
 /// δ, δ̇, δ̈ of contact `c` on the dense output.
@@ -156,7 +172,18 @@ pub(crate) fn kin(
 pub(crate) fn run(
     scene: &Scene,
     sys: &System,
+    history: Option<&mut History>,
+) -> Result<RunOutput, SolverError> {
+    run_from(scene, sys, history, None)
+}
+
+/// [`run`] with the first trial step `first_step` (s) instead of Hairer's starting step when
+/// given (for tests of the step control, e.g. a first step rejected on purpose).
+pub(crate) fn run_from(
+    scene: &Scene,
+    sys: &System,
     mut history: Option<&mut History>,
+    first_step: Option<f64>,
 ) -> Result<RunOutput, SolverError> {
     let n = sys.n;
     let nc = sys.contacts.len();
@@ -171,6 +198,7 @@ pub(crate) fn run(
     y[..n].copy_from_slice(&sys.u0);
     y[n..2 * n].copy_from_slice(&sys.v0);
     let mut modes = vec![Mode::default(); nc];
+    let mut stories = sys.stories();
     let mut episodes = vec![Episode::default(); nc];
     let mut caps = vec![f64::INFINITY; nc];
     let mut impacts: Vec<Impact> = Vec::new();
@@ -212,12 +240,12 @@ pub(crate) fn run(
         }
     }
     let stored0 = sys.stored(&y, |i| modes[i].closed);
-    let initial = sys.mech_energy(&y[..n], &y[n..2 * n]) + stored0;
+    let initial = sys.mech_energy(&stories, &y[..n], &y[n..2 * n]) + stored0;
 
     let mut tracker = ResponseTracker::new(scene);
     let mut overlaps = crate::overlap::OverlapTracker::new(scene);
     sys.observe_overlaps(&mut overlaps, 0.0, &y[..n]);
-    observe(sys, &mut tracker, &modes, &y, history.is_some());
+    observe(sys, &stories, &mut tracker, &modes, &y, history.is_some());
     tracker.sample(0.0, history.as_deref_mut());
 
     let n_int = sys.n_intervals(duration);
@@ -232,12 +260,16 @@ pub(crate) fn run(
     let mut seg = sys.segment(0);
     let mut t = 0.0f64;
 
-    rhs(sys, &seg, &modes, t, &y, &mut dp.k[0]);
+    rhs(sys, &stories, &seg, &modes, t, &y, &mut dp.k[0]);
     stats.rhs_evaluations += 1;
     let mut h = {
-        let mut f = |tt: f64, yy: &[f64], o: &mut [f64]| rhs(sys, &seg, &modes, tt, yy, o);
+        let mut f =
+            |tt: f64, yy: &[f64], o: &mut [f64]| rhs(sys, &stories, &seg, &modes, tt, yy, o);
         let cap0 = caps.iter().cloned().fold(f64::INFINITY, f64::min);
-        dp.initial_step(&mut f, t, &y.clone(), (bp(0) - t).min(cap0))
+        match first_step {
+            Some(h0) => h0,
+            None => dp.initial_step(&mut f, t, &y.clone(), (bp(0) - t).min(cap0)),
+        }
     };
     stats.rhs_evaluations += 1;
     let mut rejected_before = false;
@@ -268,7 +300,8 @@ pub(crate) fn run(
             });
         }
         let err = {
-            let mut f = |tt: f64, yy: &[f64], o: &mut [f64]| rhs(sys, &seg, &modes, tt, yy, o);
+            let mut f =
+                |tt: f64, yy: &[f64], o: &mut [f64]| rhs(sys, &stories, &seg, &modes, tt, yy, o);
             dp.try_step(&mut f, t, &y, hs)
         };
         stats.rhs_evaluations += 6;
@@ -364,8 +397,22 @@ pub(crate) fn run(
             }
         }
 
+        // --- kinks of yielding stories before the earliest contact event ------------------
+        let kink: Option<Kink> = if stories.is_empty() {
+            None
+        } else {
+            stories.locate_kink(
+                &dp,
+                0,
+                n,
+                event.map_or(1.0, |(th, _)| th),
+                &mut stats.root_iterations,
+            )
+        };
+        let th_cut = kink.map(|k| k.theta).or(event.map(|(th, _)| th));
+
         // --- peaks of closed contacts over the part of the step actually taken -----------
-        let th_end = event.map_or(1.0, |(th, _)| th);
+        let th_end = th_cut.unwrap_or(1.0);
         for (ci, c) in sys.contacts.iter().enumerate() {
             if !modes[ci].closed {
                 continue;
@@ -418,46 +465,70 @@ pub(crate) fn run(
         let t_old = t;
         // Continuous peaks over the accepted part of the step, from the dense output
         // (before the state moves on: the step's start state is still in `y`).
-        let th_end = event.map_or(1.0, |(th, _)| th.min(1.0));
+        let th_end = th_cut.map_or(1.0, |th| th.min(1.0));
         if th_end < 1.0 {
             dp.dense_all(th_end, &mut y_end);
         } else {
             y_end.copy_from_slice(&dp.y1);
         }
-        dense_peaks(sys, &dp, &y, &y_end, th_end, &mut tracker, &mut scratch);
+        dense_peaks(
+            sys,
+            &stories,
+            &dp,
+            &y,
+            &y_end,
+            th_end,
+            &mut tracker,
+            &mut scratch,
+        );
         if !overlaps.is_empty() {
             dense_overlaps(sys, &dp, t, &y, &y_end, th_end, &mut overlaps);
         }
-        match event {
-            Some((th, ci)) => {
-                dp.dense_all(th, &mut scratch);
-                y.copy_from_slice(&scratch);
-                t = if th >= 1.0 { t + hs } else { t + th * hs };
-                if land && th >= 1.0 {
-                    t = t_bp;
+        if let Some(k) = kink {
+            // A story kink before any contact event: cut the step there and commit.
+            dp.dense_all(k.theta, &mut scratch);
+            y.copy_from_slice(&scratch);
+            t += k.theta * hs;
+            stories.commit(&y[..n], &y[n..2 * n], Some(&k));
+            stats.story_kinks += 1;
+            rhs(sys, &stories, &seg, &modes, t, &y, &mut dp.k[0]);
+            stats.rhs_evaluations += 1;
+            observe(sys, &stories, &mut tracker, &modes, &y, history.is_some());
+            tracker.sample(t, history.as_deref_mut());
+        } else {
+            match event {
+                Some((th, ci)) => {
+                    dp.dense_all(th, &mut scratch);
+                    y.copy_from_slice(&scratch);
+                    t = if th >= 1.0 { t + hs } else { t + th * hs };
+                    if land && th >= 1.0 {
+                        t = t_bp;
+                    }
+                    let c = &sys.contacts[ci];
+                    if modes[ci].closed {
+                        let dd = c.rel(&y[n..2 * n]);
+                        impacts.push(episodes[ci].impact(ci, t, dd, y[imp0 + ci]));
+                        modes[ci].closed = false;
+                        caps[ci] = f64::INFINITY;
+                    } else {
+                        open_episode(ci, t, &y, &mut modes, &mut episodes, &mut caps);
+                        stats.impacts += 1;
+                        storm.record(t, || format!("contact {ci} keeps closing (gap element)"))?;
+                    }
+                    stats.events += 1;
+                    stories.commit(&y[..n], &y[n..2 * n], None);
+                    rhs(sys, &stories, &seg, &modes, t, &y, &mut dp.k[0]);
+                    stats.rhs_evaluations += 1;
+                    observe(sys, &stories, &mut tracker, &modes, &y, history.is_some());
+                    if !(land && t == t_bp) {
+                        tracker.sample(t, history.as_deref_mut());
+                    }
                 }
-                let c = &sys.contacts[ci];
-                if modes[ci].closed {
-                    let dd = c.rel(&y[n..2 * n]);
-                    impacts.push(episodes[ci].impact(ci, t, dd, y[imp0 + ci]));
-                    modes[ci].closed = false;
-                    caps[ci] = f64::INFINITY;
-                } else {
-                    open_episode(ci, t, &y, &mut modes, &mut episodes, &mut caps);
-                    stats.impacts += 1;
-                    storm.record(t, || format!("contact {ci} keeps closing (gap element)"))?;
+                None => {
+                    dp.accept_full(&mut y);
+                    t = if land { t_bp } else { t + hs };
+                    stories.commit(&y[..n], &y[n..2 * n], None);
                 }
-                stats.events += 1;
-                rhs(sys, &seg, &modes, t, &y, &mut dp.k[0]);
-                stats.rhs_evaluations += 1;
-                observe(sys, &mut tracker, &modes, &y, history.is_some());
-                if !(land && t == t_bp) {
-                    tracker.sample(t, history.as_deref_mut());
-                }
-            }
-            None => {
-                dp.accept_full(&mut y);
-                t = if land { t_bp } else { t + hs };
             }
         }
         let taken = t - t_old;
@@ -468,7 +539,7 @@ pub(crate) fn run(
         stats.steps += 1;
         h = hnew;
         if land && t == t_bp {
-            observe(sys, &mut tracker, &modes, &y, history.is_some());
+            observe(sys, &stories, &mut tracker, &modes, &y, history.is_some());
             tracker.sample(t, history.as_deref_mut());
             interval += 1;
             if interval < n_int {
@@ -479,7 +550,7 @@ pub(crate) fn run(
                 let jump = (a_new - a_old).abs() > 1e-9 * (a_new.abs() + a_old.abs());
                 seg = next;
                 if jump {
-                    rhs(sys, &seg, &modes, t, &y, &mut dp.k[0]);
+                    rhs(sys, &stories, &seg, &modes, t, &y, &mut dp.k[0]);
                     stats.rhs_evaluations += 1;
                 }
             }
@@ -503,12 +574,14 @@ pub(crate) fn run(
         y[e_damp],
         y[e_work],
         stored0,
-        sys.mech_energy(&y[..n], &y[n..2 * n]),
+        sys.mech_energy(&stories, &y[..n], &y[n..2 * n]),
         stored_t,
+        stories.hysteretic_energy(),
     );
     Ok(output(
         sys,
         scene,
+        &stories,
         tracker.finish(),
         impacts,
         energy,
@@ -580,6 +653,7 @@ pub(crate) fn dense_overlaps(
 /// integration tolerance, as the solution does.
 pub(crate) fn dense_peaks(
     sys: &System,
+    stories: &Stories,
     dp: &Dopri5,
     y: &[f64],
     y1: &[f64],
@@ -593,26 +667,37 @@ pub(crate) fn dense_peaks(
         return;
     }
     for (bi, b) in sys.blocks.iter().enumerate() {
+        let yielding = stories.yielding(bi);
         for j in 0..b.len {
             let i = b.off + j;
             for story in [false, true] {
                 let below = if story && j > 0 { Some(i - 1) } else { None };
-                let sc = if story { sys.story_k[i] } else { 1.0 };
+                // A yielding story: its drift (the law's shear is monotone in the drift along
+                // a branch and the step crosses no kink, so the shear's extremes lie at the
+                // drift's); every interior extremum is located (a smaller drift may carry a
+                // larger shear once the story has yielded).
+                let sc = if story && !yielding {
+                    sys.story_k[i]
+                } else {
+                    1.0
+                };
                 let comb =
                     |u: &[f64], off: usize| sc * (u[off + i] - below.map_or(0.0, |l| u[off + l]));
                 let (y0, yd0, ye, yde) = (comb(y, 0), comb(y, n), comb(y1, 0), comb(y1, n));
                 let Some((_, h)) = crate::response::hermite_extremum(y0, yd0, ye, yde, len) else {
                     continue;
                 };
-                let (vmax, dmax) = tracker.peak(bi, j);
-                let peak = if story { vmax } else { dmax };
-                let slack = if th_end < 1.0 {
-                    f64::INFINITY
-                } else {
-                    sc * (dp.quartic(i) - below.map_or(0.0, |l| dp.quartic(l))).abs() / 16.0
-                };
-                if h.abs() + slack < peak {
-                    continue;
+                if !(story && yielding) {
+                    let (vmax, dmax) = tracker.peak(bi, j);
+                    let peak = if story { vmax } else { dmax };
+                    let slack = if th_end < 1.0 {
+                        f64::INFINITY
+                    } else {
+                        sc * (dp.quartic(i) - below.map_or(0.0, |l| dp.quartic(l))).abs() / 16.0
+                    };
+                    if h.abs() + slack < peak {
+                        continue;
+                    }
                 }
                 let rate = |th: f64| {
                     sc * (dp.dense(n + i, th) - below.map_or(0.0, |l| dp.dense(n + l, th)))
@@ -621,7 +706,7 @@ pub(crate) fn dense_peaks(
                 for m in b.off..b.off + b.len {
                     scratch[m] = dp.dense(m, th);
                 }
-                tracker.observe_peaks(bi, &scratch[b.off..b.off + b.len]);
+                sys.observe_peaks(stories, tracker, bi, &scratch[b.off..b.off + b.len]);
             }
         }
     }

@@ -37,6 +37,7 @@ pub mod adaptive;
 pub mod dopri;
 pub mod law;
 pub mod newmark;
+pub mod stories;
 
 use structure::scene::Integrator;
 use structure::Scene;
@@ -44,6 +45,7 @@ use structure::Scene;
 use crate::output::EnergyAudit;
 use crate::{History, RunOutput, SolverError};
 use law::Law;
+pub use stories::Stories;
 
 /// Spacing of the record points of a scene without ground motion, s.
 pub const FREE_VIBRATION_SAMPLE: f64 = 1e-3;
@@ -59,6 +61,15 @@ pub fn solve(scene: &Scene, history: Option<&mut History>) -> Result<RunOutput, 
     };
     out.stats.wall_seconds = start.elapsed().as_secs_f64();
     Ok(out)
+}
+
+/// The adaptive integrator with a given first trial step `first_step` (s) instead of
+/// Hairer's starting step: a hook for tests of the step control (a first step far too long
+/// is rejected, and a rejected step must leave the contact and story state untouched).
+pub fn solve_adaptive_from(scene: &Scene, first_step: f64) -> Result<RunOutput, SolverError> {
+    let sys = System::new(scene)?;
+    refuse_too_long(scene, &sys)?;
+    adaptive::run_from(scene, &sys, None, Some(first_step))
 }
 
 /// Refuses, before anything is allocated, a run whose step count surely exceeds
@@ -167,6 +178,8 @@ pub(crate) struct System {
     pub ground: Option<structure::ground::GroundMotion>,
     /// Largest circular frequency of the buildings, rad/s (explicit-stability estimate).
     pub omega_max: f64,
+    /// Virgin story state of the yielding buildings (empty when all are linear).
+    pub stories0: Stories,
 }
 
 /// Mode of one contact during a step of the adaptive integrator.
@@ -254,7 +267,13 @@ impl System {
             accel,
             ground: scene.ground.clone(),
             omega_max,
+            stories0: Stories::new(scene, &offsets),
         })
+    }
+
+    /// A fresh story state (virgin springs) for one analysis.
+    pub fn stories(&self) -> Stories {
+        self.stories0.clone()
     }
 
     /// Ground acceleration in record interval `i` ([i·dt, (i+1)·dt]); zero past the record.
@@ -279,24 +298,37 @@ impl System {
         self.ground.as_ref().map_or(0.0, |g| g.accel_at(t))
     }
 
-    /// Restoring forces: `f` ← −K u − C v (N); returns vᵀ C v (W).
+    /// Restoring forces: `f` ← −f_s(u) − C v (N), f_s the story forces (k_j d_j for a
+    /// linear building, the bilinear law from the committed state of `stories` for a
+    /// yielding one: a pure trial); returns vᵀ C v (W).
     #[inline]
-    pub fn internal(&self, u: &[f64], v: &[f64], f: &mut [f64]) -> f64 {
+    pub fn internal(&self, stories: &Stories, u: &[f64], v: &[f64], f: &mut [f64]) -> f64 {
         let mut pdamp = 0.0;
-        for b in &self.blocks {
+        for (bi, b) in self.blocks.iter().enumerate() {
             let (o, n) = (b.off, b.len);
             let ub = &u[o..o + n];
             let vb = &v[o..o + n];
             let kb = &self.story_k[o..o + n];
             let fb = &mut f[o..o + n];
             let mut below = 0.0;
-            for j in 0..n {
-                let s = kb[j] * (ub[j] - below);
-                fb[j] = -s;
-                if j > 0 {
-                    fb[j - 1] += s;
+            if stories.yielding(bi) {
+                for j in 0..n {
+                    let s = stories.story_force(bi, j, ub[j] - below).0;
+                    fb[j] = -s;
+                    if j > 0 {
+                        fb[j - 1] += s;
+                    }
+                    below = ub[j];
                 }
-                below = ub[j];
+            } else {
+                for j in 0..n {
+                    let s = kb[j] * (ub[j] - below);
+                    fb[j] = -s;
+                    if j > 0 {
+                        fb[j - 1] += s;
+                    }
+                    below = ub[j];
+                }
             }
             // C v by columns (C is symmetric): axpy loops that vectorise.
             let mut buf = [0.0f64; 64];
@@ -320,10 +352,17 @@ impl System {
         pdamp
     }
 
-    /// Kinetic + strain energy, J.
-    pub fn mech_energy(&self, u: &[f64], v: &[f64]) -> f64 {
+    /// Kinetic + recoverable strain energy, J: ½ k d² per linear story, ½ k₀ (d − u_p)² +
+    /// ½ α²/H per yielding story (committed state of `stories`).
+    pub fn mech_energy(&self, stories: &Stories, u: &[f64], v: &[f64]) -> f64 {
         let mut e = 0.0;
-        for b in &self.blocks {
+        for (bi, b) in self.blocks.iter().enumerate() {
+            if stories.yielding(bi) {
+                for j in b.off..b.off + b.len {
+                    e += 0.5 * self.mass[j] * v[j] * v[j];
+                }
+                continue;
+            }
             let mut below = 0.0;
             for j in b.off..b.off + b.len {
                 let d = u[j] - below;
@@ -331,7 +370,11 @@ impl System {
                 below = u[j];
             }
         }
-        e
+        if stories.is_empty() {
+            e
+        } else {
+            e + stories.recoverable_energy(u)
+        }
     }
 
     /// Energy stored in the contact springs whose mode is closed, J.
@@ -356,23 +399,60 @@ impl System {
         ov.observe(t, |b, i| u[self.blocks[b].off + i]);
     }
 
-    pub fn observe(&self, tracker: &mut crate::response::ResponseTracker, u: &[f64]) {
+    pub fn observe(
+        &self,
+        stories: &Stories,
+        tracker: &mut crate::response::ResponseTracker,
+        u: &[f64],
+    ) {
         for (bi, b) in self.blocks.iter().enumerate() {
-            tracker.observe(bi, &u[b.off..b.off + b.len]);
+            let ub = &u[b.off..b.off + b.len];
+            if stories.yielding(bi) {
+                let shear = self.law_shears(stories, bi, ub);
+                tracker.observe_with_shear(bi, ub, &shear);
+            } else {
+                tracker.observe(bi, ub);
+            }
         }
+    }
+
+    /// Updates the peaks of building `bi` (floor displacements `ub`, m, building-local) at an
+    /// instant that is not a history sample, with the law's shears for a yielding building.
+    pub fn observe_peaks(
+        &self,
+        stories: &Stories,
+        tracker: &mut crate::response::ResponseTracker,
+        bi: usize,
+        ub: &[f64],
+    ) {
+        if stories.yielding(bi) {
+            let shear = self.law_shears(stories, bi, ub);
+            tracker.observe_peaks_with_shear(bi, ub, &shear);
+        } else {
+            tracker.observe_peaks(bi, ub);
+        }
+    }
+
+    /// Story shears (N) of yielding building `bi` at floor displacements `ub` (m), from the
+    /// committed state.
+    fn law_shears(&self, stories: &Stories, bi: usize, ub: &[f64]) -> Vec<f64> {
+        let mut shear = vec![0.0; ub.len()];
+        stories.shears(bi, ub, &mut shear);
+        shear
     }
 
     /// Observes every building's floor displacements and velocities and the contact forces
     /// (N, compressive > 0) for a history sample.
     pub fn observe_sample(
         &self,
+        stories: &Stories,
         tracker: &mut crate::response::ResponseTracker,
         u: &[f64],
         v: &[f64],
         forces: &[f64],
     ) {
+        self.observe(stories, tracker, u);
         for (bi, b) in self.blocks.iter().enumerate() {
-            tracker.observe(bi, &u[b.off..b.off + b.len]);
             tracker.observe_velocity(bi, &v[b.off..b.off + b.len]);
         }
         tracker.observe_contact_forces(forces);
@@ -392,7 +472,9 @@ impl System {
     }
 }
 
-/// Energy audit from the integrated quantities.
+/// Energy audit from the integrated quantities (`hysteretic`: dissipated by yielding, J;
+/// `mech_t` includes the recoverable story energy).
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn audit(
     initial: f64,
     input: f64,
@@ -401,6 +483,7 @@ pub(crate) fn audit(
     stored0: f64,
     mech_t: f64,
     stored_t: f64,
+    hysteretic: f64,
 ) -> EnergyAudit {
     let contact = work + stored0 - stored_t;
     let final_ = mech_t + stored_t;
@@ -409,8 +492,9 @@ pub(crate) fn audit(
         input,
         damping,
         contact,
+        hysteretic,
         final_,
-        balance_error: initial + input - damping - contact - final_,
+        balance_error: initial + input - damping - contact - hysteretic - final_,
     }
 }
 
@@ -419,13 +503,17 @@ pub(crate) fn audit(
 pub(crate) fn output(
     sys: &System,
     scene: &Scene,
-    buildings: Vec<crate::output::BuildingResponse>,
+    stories: &Stories,
+    mut buildings: Vec<crate::output::BuildingResponse>,
     mut impacts: Vec<crate::Impact>,
     energy: EnergyAudit,
     stats: crate::Stats,
     overlaps: crate::overlap::OverlapTracker,
 ) -> RunOutput {
     impacts.sort_by(|a, b| a.time.total_cmp(&b.time));
+    for (bi, b) in buildings.iter_mut().enumerate() {
+        b.hysteretic_energy = stories.building_hysteretic_energy(bi);
+    }
     RunOutput {
         method: "gap".into(),
         settings: sys.settings(scene),

@@ -65,34 +65,16 @@ pub(crate) fn run(
 
     // Effective stiffness A = K + (2/Δt) C + (4/Δt²) M, block diagonal per building: each
     // block is factorised once (Cholesky) and kept as its explicit inverse, so a solve is a
-    // small dense matvec per building.
+    // small dense matvec per building. A yielding building's block is refactorised with the
+    // stories' consistent tangents whenever the set of yielded stories of a Newton iterate
+    // changes (K_t assembled from k_t,j = k₀ or b k₀, see story_law.rs).
     let mut ainv: Vec<Vec<f64>> = Vec::with_capacity(sys.blocks.len());
     for b in &sys.blocks {
-        let (o, m) = (b.off, b.len);
-        let mut amat = DMatrix::<f64>::zeros(m, m);
-        for j in 0..m {
-            let kj = sys.story_k[o + j];
-            amat[(j, j)] += kj + a0 * sys.mass[o + j];
-            if j > 0 {
-                amat[(j - 1, j - 1)] += kj;
-                amat[(j - 1, j)] -= kj;
-                amat[(j, j - 1)] -= kj;
-            }
-            for i in 0..m {
-                amat[(i, j)] += a1 * b.c[i * m + j];
-            }
-        }
-        let chol = amat.cholesky().ok_or_else(|| SolverError::NewtonFailure {
-            time: 0.0,
-            iterations: 0,
-            residual: f64::NAN,
-            context: "the effective stiffness K + 2C/Δt + 4M/Δt² is not positive definite".into(),
-        })?;
-        let inv = chol.inverse();
-        ainv.push((0..m * m).map(|ij| inv[(ij / m, ij % m)]).collect());
+        let kt = &sys.story_k[b.off..b.off + b.len];
+        ainv.push(block_inverse(sys, b, kt, a0, a1, 0.0)?);
     }
-    let solve = |r: &mut DVector<f64>, tmp: &mut [f64]| {
-        for (b, inv) in sys.blocks.iter().zip(&ainv) {
+    let solve = |ainv: &[Vec<f64>], r: &mut DVector<f64>, tmp: &mut [f64]| {
+        for (b, inv) in sys.blocks.iter().zip(ainv) {
             let (o, m) = (b.off, b.len);
             let rb = &r.as_slice()[o..o + m];
             let tb = &mut tmp[..m];
@@ -116,11 +98,24 @@ pub(crate) fn run(
             if !c.wall {
                 w[c.r] = -1.0;
             }
-            solve(&mut w, &mut tmp);
+            solve(&ainv, &mut w, &mut tmp);
             w
         })
         .collect();
     let wz = DMatrix::from_fn(nc, nc, |i, j| sys.contacts[i].rel(z[j].as_slice()));
+    // The linear block inverses and Z = A⁻¹W; the ones in use (tangent of the iterate).
+    let (ainv_lin, z_lin, wz_lin) = (ainv.clone(), z.clone(), wz.clone());
+    let (mut z, mut wz) = (z, wz);
+    let mut stories = sys.stories();
+    let linear_stories = super::Stories::default();
+    // Story tangents of the block inverses in use (per building; the elastic stiffness
+    // when nothing yields).
+    let mut kt_used: Vec<Vec<f64>> = sys
+        .blocks
+        .iter()
+        .map(|b| sys.story_k[b.off..b.off + b.len].to_vec())
+        .collect();
+    let mut kt_new: Vec<f64> = Vec::new();
 
     let mut u = sys.u0.clone();
     let mut v = sys.v0.clone();
@@ -163,9 +158,9 @@ pub(crate) fn run(
         }
     }
     let stored0 = sys.stored(&u, |i| active[i]);
-    let initial = sys.mech_energy(&u, &v) + stored0;
+    let initial = sys.mech_energy(&stories, &u, &v) + stored0;
     let mut ag = sys.ground_at(0.0);
-    sys.internal(&u, &v, &mut f);
+    sys.internal(&stories, &u, &v, &mut f);
     for i in 0..n {
         acc[i] = f[i] - sys.mass[i] * ag;
     }
@@ -179,7 +174,7 @@ pub(crate) fn run(
     let mut tracker = ResponseTracker::new(scene);
     let mut overlaps = crate::overlap::OverlapTracker::new(scene);
     sys.observe_overlaps(&mut overlaps, 0.0, &u);
-    sys.observe_sample(&mut tracker, &u, &v, &force);
+    sys.observe_sample(&stories, &mut tracker, &u, &v, &force);
     tracker.sample(0.0, history.as_deref_mut());
 
     let (mut e_in, mut e_damp, mut e_work) = (0.0, 0.0, 0.0);
@@ -239,7 +234,57 @@ pub(crate) fn run(
                     a_new[i] = a0 * (u_new[i] - u[i] - dt * v[i]) - acc[i];
                     v_new[i] = v[i] + 0.5 * dt * (acc[i] + a_new[i]);
                 }
-                sys.internal(&u_new, &v_new, &mut f);
+                sys.internal(&stories, &u_new, &v_new, &mut f);
+                if !stories.is_empty() {
+                    // Consistent tangents of the iterate (trial from the state committed at
+                    // the step start): refactorise the blocks whose yielded set changed.
+                    let mut changed = false;
+                    for (bi, b) in sys.blocks.iter().enumerate() {
+                        if !stories.yielding(bi) {
+                            continue;
+                        }
+                        kt_new.clear();
+                        let mut below = 0.0;
+                        for j in 0..b.len {
+                            let d = u_new[b.off + j] - below;
+                            kt_new.push(stories.story_force(bi, j, d).1);
+                            below = u_new[b.off + j];
+                        }
+                        if kt_new != kt_used[bi] {
+                            let elastic = kt_new == sys.story_k[b.off..b.off + b.len];
+                            ainv[bi] = if elastic {
+                                ainv_lin[bi].clone()
+                            } else {
+                                block_inverse(sys, b, &kt_new, a0, a1, t1)?
+                            };
+                            kt_used[bi].clone_from(&kt_new);
+                            changed = true;
+                        }
+                    }
+                    if changed && nc > 0 {
+                        if kt_used
+                            .iter()
+                            .zip(&sys.blocks)
+                            .all(|(k, b)| k[..] == sys.story_k[b.off..b.off + b.len])
+                        {
+                            z.clone_from(&z_lin);
+                            wz.clone_from(&wz_lin);
+                        } else {
+                            for (ci, c) in sys.contacts.iter().enumerate() {
+                                let zc = &mut z[ci];
+                                zc.fill(0.0);
+                                zc[c.l] = 1.0;
+                                if !c.wall {
+                                    zc[c.r] = -1.0;
+                                }
+                                solve(&ainv, zc, &mut tmp);
+                            }
+                            wz = DMatrix::from_fn(nc, nc, |i, j| {
+                                sys.contacts[i].rel(z[j].as_slice())
+                            });
+                        }
+                    }
+                }
                 let mut scale: f64 = 1.0;
                 for i in 0..n {
                     let p = -sys.mass[i] * ag1;
@@ -274,7 +319,7 @@ pub(crate) fn run(
                 }
                 stats.newton_iterations += 1;
                 // du = (A + W D Wᵀ)⁻¹ R by Woodbury.
-                solve(&mut res, &mut tmp);
+                solve(&ainv, &mut res, &mut tmp);
                 let act: Vec<usize> = (0..nc).filter(|&i| alpha[i] != 0.0).collect();
                 if !act.is_empty() {
                     let m = act.len();
@@ -381,7 +426,7 @@ pub(crate) fn run(
             e_in -= sys.mass[i] * (u_new[i] - u[i]) * agbar;
             vbar[i] = 0.5 * (v[i] + v_new[i]);
         }
-        e_damp += dt * sys.internal(&zero, &vbar, &mut f);
+        e_damp += dt * sys.internal(&linear_stories, &zero, &vbar, &mut f);
         for ci in 0..nc {
             let (d0, _) = kin(&u, &v, ci);
             let (d1, dd1) = kin(&u_new, &v_new, ci);
@@ -418,14 +463,15 @@ pub(crate) fn run(
         u.copy_from_slice(&u_new);
         v.copy_from_slice(&v_new);
         acc.copy_from_slice(&a_new);
+        stories.commit(&u, &v, None);
         ag = ag1;
         stats.steps += 1;
         // Peaks at every step, as a finite-element program reports them (not continuous
         // maxima: between steps Newmark has no interpolant of its own accuracy).
         if history.is_some() {
-            sys.observe_sample(&mut tracker, &u, &v, &force);
+            sys.observe_sample(&stories, &mut tracker, &u, &v, &force);
         } else {
-            sys.observe(&mut tracker, &u);
+            sys.observe(&stories, &mut tracker, &u);
         }
         sys.observe_overlaps(&mut overlaps, t1, &u);
         tracker.sample(t1, history.as_deref_mut());
@@ -444,16 +490,53 @@ pub(crate) fn run(
         e_damp,
         e_work,
         stored0,
-        sys.mech_energy(&u, &v),
+        sys.mech_energy(&stories, &u, &v),
         stored_t,
+        stories.hysteretic_energy(),
     );
     Ok(output(
         sys,
         scene,
+        &stories,
         tracker.finish(),
         impacts,
         energy,
         stats,
         overlaps,
     ))
+}
+
+/// The explicit inverse of one building's effective stiffness K_t + (2/Δt) C + (4/Δt²) M
+/// (row-major, `b.len`²), K_t assembled in story form from the story tangents `kt` (N/m);
+/// Cholesky. `time` (s) is reported if the matrix is not positive definite.
+fn block_inverse(
+    sys: &System,
+    b: &super::Block,
+    kt: &[f64],
+    a0: f64,
+    a1: f64,
+    time: f64,
+) -> Result<Vec<f64>, SolverError> {
+    let (o, m) = (b.off, b.len);
+    let mut amat = DMatrix::<f64>::zeros(m, m);
+    for j in 0..m {
+        let kj = kt[j];
+        amat[(j, j)] += kj + a0 * sys.mass[o + j];
+        if j > 0 {
+            amat[(j - 1, j - 1)] += kj;
+            amat[(j - 1, j)] -= kj;
+            amat[(j, j - 1)] -= kj;
+        }
+        for i in 0..m {
+            amat[(i, j)] += a1 * b.c[i * m + j];
+        }
+    }
+    let chol = amat.cholesky().ok_or_else(|| SolverError::NewtonFailure {
+        time,
+        iterations: 0,
+        residual: f64::NAN,
+        context: "the effective stiffness K + 2C/Δt + 4M/Δt² is not positive definite".into(),
+    })?;
+    let inv = chol.inverse();
+    Ok((0..m * m).map(|ij| inv[(ij / m, ij % m)]).collect())
 }

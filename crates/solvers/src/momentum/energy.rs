@@ -30,6 +30,7 @@ impl EnergyAccount {
             input: self.input,
             damping: self.damping,
             contact: self.contact,
+            hysteretic: 0.0,
             final_,
             balance_error: self.initial + self.input - self.damping - self.contact - final_,
         }

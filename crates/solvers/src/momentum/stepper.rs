@@ -598,6 +598,7 @@ impl<'a> Stepper<'a> {
                 name: bd.name.clone(),
                 story_shear_max: self.shear_max[b].clone(),
                 floor_displacement_max: self.disp_max[b].clone(),
+                ..Default::default()
             })
             .collect()
     }

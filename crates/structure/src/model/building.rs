@@ -73,6 +73,9 @@ pub struct Building {
     pub initial_velocity: Vec<f64>,
     /// Published frequencies (Hz) shown beside the model's by `pound modes`; may be empty.
     pub reference_frequencies_hz: Vec<f64>,
+    /// The story force–drift law (linear by default). The modes, the damping matrix and
+    /// `story_stiffness` are those of the elastic building (initial stiffness).
+    pub story_law: super::StoryLaw,
 }
 
 impl Building {
@@ -88,6 +91,7 @@ impl Building {
             initial_displacement: vec![0.0; n],
             initial_velocity: vec![0.0; n],
             reference_frequencies_hz: Vec::new(),
+            story_law: super::StoryLaw::Linear,
         }
     }
 
@@ -166,6 +170,20 @@ impl Building {
             return Err(bad(format!(
                 "`damping_ratio` = {z}: expected 0 <= ratio < 1 (underdamped modes)"
             )));
+        }
+        if let super::StoryLaw::Bilinear { yield_shear, .. } = &self.story_law {
+            if yield_shear.len() != n {
+                return Err(bad(format!(
+                    "`yield_shear` has {} values, expected {n} (one per story, story 1 first)",
+                    yield_shear.len()
+                )));
+            }
+        }
+        if let Some(params) = self.story_law.bilinear_params(&self.story_stiffness) {
+            for (i, p) in params.iter().enumerate() {
+                p.check()
+                    .map_err(|what| bad(format!("story {}: {what}", i + 1)))?;
+            }
         }
         Ok(())
     }

@@ -22,7 +22,7 @@ pub use calibrate::{
     calibrate_first_frequency, calibrate_two_frequencies, top_to_ground, Calibration,
 };
 pub use modes::Modes;
-pub use story_law::{Bilinear, BilinearParams, BilinearState};
+pub use story_law::{Bilinear, BilinearParams, BilinearState, StoryLaw};
 
 /// Errors raised while building or analysing a model.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

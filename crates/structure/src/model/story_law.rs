@@ -26,6 +26,56 @@
 //! committed state answers elastically: the yield kinks an adaptive integrator locates as
 //! events.
 
+/// How the stories of a building resist drift (scene key `story_law`).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub enum StoryLaw {
+    /// Linear elastic stories, V_j = k_j (u_j − u_{j−1}) (`story_law = "linear"`, the default).
+    #[default]
+    Linear,
+    /// Bilinear elastic–plastic stories with kinematic hardening ([`Bilinear`]):
+    /// `story_law = "bilinear"` with `yield_shear` and `hardening_ratio`.
+    Bilinear {
+        /// Yield shear F_y per story, N, story 1 first (`yield_shear`: a number for every
+        /// story or one per story; no default).
+        yield_shear: Vec<f64>,
+        /// Post-yield tangent over the elastic story stiffness, b in [0, 1)
+        /// (`hardening_ratio`, dimensionless; default [`DEFAULT_HARDENING_RATIO`]).
+        hardening_ratio: f64,
+    },
+}
+
+/// Default of the scene key `hardening_ratio` (dimensionless).
+pub const DEFAULT_HARDENING_RATIO: f64 = 0.02;
+
+impl StoryLaw {
+    /// True for a law that can yield (the linear modal method does not apply).
+    pub fn is_yielding(&self) -> bool {
+        !matches!(self, StoryLaw::Linear)
+    }
+
+    /// The bilinear parameters of every story, given the elastic story stiffnesses (N/m);
+    /// `None` for linear stories.
+    pub fn bilinear_params(&self, story_stiffness: &[f64]) -> Option<Vec<BilinearParams>> {
+        match self {
+            StoryLaw::Linear => None,
+            StoryLaw::Bilinear {
+                yield_shear,
+                hardening_ratio,
+            } => Some(
+                story_stiffness
+                    .iter()
+                    .zip(yield_shear)
+                    .map(|(&k, &fy)| BilinearParams {
+                        stiffness: k,
+                        yield_shear: fy,
+                        hardening_ratio: *hardening_ratio,
+                    })
+                    .collect(),
+            ),
+        }
+    }
+}
+
 /// Parameters of a bilinear story spring.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BilinearParams {

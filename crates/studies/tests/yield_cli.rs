@@ -1,0 +1,183 @@
+//! Yielding stories (issue 13) through the `pound` binary: the momentum method refuses a
+//! building with `story_law = "bilinear"` (exit 2, naming the building and the methods that
+//! apply, no output file).
+
+mod common;
+use common::{pound, TempDir};
+
+const PAPER: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../studies/paper/scene.toml"
+);
+
+#[test]
+fn momentum_refuses_a_yielding_building() {
+    let dir = TempDir::new("yield-refuse");
+    let out = dir.0.join("run.json");
+    let o = pound(&[
+        "run",
+        PAPER,
+        "--method",
+        "momentum",
+        "--set",
+        "buildings.1.story_law=bilinear",
+        "--set",
+        "buildings.1.yield_shear=2e6",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "stderr: {err}");
+    for part in ["building2", "yielding", "--method gap", "--method impulse"] {
+        assert!(err.contains(part), "stderr {err:?} should contain {part:?}");
+    }
+    assert!(!out.exists(), "no output file on a refusal");
+}
+
+/// `pound run --method gap` on a yielding paper scene (aligned-floor contacts, both
+/// buildings bilinear): exit 0; the JSON carries per-story peak drift, ductility and
+/// residual drift, the hysteretic energy per building and in the energy audit (whose
+/// balance closes), and the history CSV's story shears are the law's (bounded by the
+/// hardening branch, not k·drift), for both integrators.
+#[test]
+fn gap_runs_a_yielding_scene_with_ductility_and_hysteretic_energy_in_the_json() {
+    let aligned = PAPER.replace("scene.toml", "scene-aligned.toml");
+    for integrator in ["adaptive", "newmark"] {
+        let dir = TempDir::new("yield-run");
+        let out = dir.0.join("run.json");
+        let hist = dir.0.join("history.csv");
+        let o = pound(&[
+            "run",
+            &aligned,
+            "--method",
+            "gap",
+            "--set",
+            &format!("gap_element.integrator={integrator}"),
+            "--set",
+            "buildings.0.story_law=bilinear",
+            "--set",
+            "buildings.0.yield_shear=3e7",
+            "--set",
+            "buildings.1.story_law=bilinear",
+            "--set",
+            "buildings.1.yield_shear=3e7",
+            "--set",
+            "analysis.duration=8",
+            "--out",
+            out.to_str().unwrap(),
+            "--history",
+            hist.to_str().unwrap(),
+        ]);
+        assert_eq!(
+            o.status.code(),
+            Some(0),
+            "{integrator}: stderr {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+        let e = &v["energy"];
+        let (input, hyst) = (
+            e["input"].as_f64().unwrap(),
+            e["hysteretic"].as_f64().unwrap(),
+        );
+        assert!(hyst > 0.0 && hyst < input, "{integrator}: {e}");
+        assert!(
+            e["balance_error"].as_f64().unwrap().abs() < 1e-4 * input,
+            "{integrator}: {e}"
+        );
+        let mut sum = 0.0;
+        let mut mu_max: f64 = 0.0;
+        for (bi, b) in v["buildings"].as_array().unwrap().iter().enumerate() {
+            let n = b["story_shear_max"].as_array().unwrap().len();
+            let drift = b["story_drift_max"].as_array().unwrap();
+            let mu = b["ductility"].as_array().unwrap();
+            assert_eq!((drift.len(), mu.len()), (n, n));
+            assert_eq!(b["residual_drift"].as_array().unwrap().len(), n);
+            // ductility = peak drift / (F_y / k₀), F_y = 3e7 N for every story.
+            let k: Vec<f64> = serde_json::from_value(
+                v["resolved_scene"]["buildings"][bi]["story_stiffness"].clone(),
+            )
+            .unwrap();
+            for j in 0..n {
+                let (d, m) = (drift[j].as_f64().unwrap(), mu[j].as_f64().unwrap());
+                assert!(
+                    (m - d / (3e7 / k[j])).abs() <= 1e-12 * m,
+                    "{integrator}: {b}"
+                );
+                mu_max = mu_max.max(m);
+            }
+            sum += b["hysteretic_energy"].as_f64().unwrap();
+        }
+        assert!(mu_max > 1.0, "{integrator}: the stories yield ({mu_max})");
+        assert!(
+            (sum - hyst).abs() <= 1e-9 * hyst,
+            "{integrator}: {sum} vs {hyst}"
+        );
+        // The history's story shears are the law's: never above F_y (1 + b (μ − 1)) (b = 0.02,
+        // the default), where k·drift would reach μ F_y.
+        let csv = std::fs::read_to_string(&hist).unwrap();
+        let mut lines = csv.lines();
+        let header: Vec<String> = lines
+            .next()
+            .unwrap()
+            .split(',')
+            .map(|h| h.trim_matches('"').to_string())
+            .collect();
+        let cols: Vec<usize> = (0..header.len())
+            .filter(|&i| header[i].contains("_V") && header[i].ends_with("_N"))
+            .collect();
+        assert!(!cols.is_empty(), "{header:?}");
+        let bound = 3e7 * (1.0 + 0.02 * (mu_max - 1.0)) * (1.0 + 1e-9);
+        let mut rows = 0;
+        let mut v_max: f64 = 0.0;
+        for line in lines {
+            let f: Vec<&str> = line.split(',').collect();
+            for &c in &cols {
+                v_max = v_max.max(f[c].trim_matches('"').parse::<f64>().unwrap().abs());
+            }
+            rows += 1;
+        }
+        assert!(rows > 100, "{integrator}: {rows} rows");
+        assert!(
+            v_max > 3e7 * (1.0 - 1e-6) && v_max <= bound,
+            "{integrator}: history shear {v_max} vs yield 3e7, bound {bound}"
+        );
+    }
+}
+
+/// The `pound run` summary of a yielding run: drift, ductility and residual drift columns,
+/// the hysteretic energy per building and in the energy line.
+#[test]
+fn the_run_summary_shows_ductility_and_hysteretic_energy() {
+    let o = pound(&[
+        "run",
+        PAPER,
+        "--method",
+        "gap",
+        "--no-baseline",
+        "--set",
+        "buildings.1.story_law=bilinear",
+        "--set",
+        "buildings.1.yield_shear=3e7",
+        "--set",
+        "analysis.duration=6",
+    ]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    for part in [
+        "drift max (m)",
+        "ductility",
+        "residual drift (m)",
+        "hysteretic energy (J):",
+        ", hysteretic ",
+        "story kinks",
+    ] {
+        assert!(stdout.contains(part), "summary lacks {part:?}:\n{stdout}");
+    }
+}
