@@ -6,15 +6,15 @@
 //! gap element's [`System`] instead of modal coordinates, and integrated between events by
 //! the adaptive Dormand–Prince 5(4) stepper ([`crate::gap::dopri`]) with dense output and
 //! event location. Nothing in it needs modal superposition: it is the method for buildings
-//! whose story springs are not linear.
+//! whose story springs are not linear (yielding stories, below).
 //!
 //! **Between events** (u, v floor displacements and velocities relative to the ground,
 //! lumped M, K in story form, classical C, all as in [`crate::gap`]):
 //!
 //! ```text
-//! M ü + C u̇ + K u = −M 1 a_g(t) − Σ_{c held} G_cᵀ λ_c
+//! M ü + C u̇ + f_s(u) = −M 1 a_g(t) − Σ_{c held} G_cᵀ λ_c     (f_s = K u when linear)
 //! G_c = e_left − e_right (e_left alone for a wall),  δ_c = G_c u − gap_c
-//! λ = W⁻¹ G ü_free,  W = G M⁻¹ Gᵀ (Delassus),  ü_free = M⁻¹(−C u̇ − K u) − 1 a_g
+//! λ = W⁻¹ G ü_free,  W = G M⁻¹ Gᵀ (Delassus),  ü_free = M⁻¹(−C u̇ − f_s(u)) − 1 a_g
 //! ```
 //!
 //! so that δ̈ = 0 on the contacts held together (λ > 0 compressive, N). The state carries
@@ -47,9 +47,18 @@
 //! projected to zero (Δv = −M⁻¹Gᵀ W⁻¹ G v, Δu = −M⁻¹Gᵀ W⁻¹ δ), the mechanical energy removed
 //! going to the contact account, as the momentum method projects at every held-segment end.
 //!
-//! **Energy audit**: initial + input − damping − contact = final (kinetic + strain),
-//! contact = impact losses + projection losses + ∫ λ·δ̇ dt; the balance error measures the
-//! integration only.
+//! **Yielding stories** (`story_law = "bilinear"`, [`crate::gap::stories`]): the restoring
+//! force −f_s(u) − C u̇ takes the story law's shears, evaluated from the committed story
+//! state (a pure trial at every stage, so a rejected step changes nothing). As in the
+//! adaptive gap element, the yield and unloading kinks of the law are located on the dense
+//! output (before the earliest contact event) and the step is cut there; the stories are
+//! committed at every accepted state, and again after an impulse or a projection changes
+//! the state. The holding forces and their release are evaluated with the same law.
+//!
+//! **Energy audit**: initial + input − damping − contact − hysteretic = final (kinetic +
+//! recoverable strain), contact = impact losses + projection losses + ∫ λ·δ̇ dt (a
+//! projection on yielding stories is charged net of the plastic work it does); the balance
+//! error measures the integration only.
 //!
 //! **How it differs from the momentum method with all modes.** Free flight and impacts are
 //! the same equations: the Delassus matrix G M⁻¹ Gᵀ equals the modal Σ g gᵀ (Φ Φᵀ = M⁻¹),
@@ -97,17 +106,19 @@ pub fn solve(scene: &Scene, history: Option<&mut History>) -> Result<RunOutput, 
             context: "floor state at the end of the analysis".into(),
         });
     }
-    let initial = sys.mech_energy(&sys.u0, &sys.v0);
-    let final_ = sys.mech_energy(&y[..n], &y[n..2 * n]);
+    let initial = sys.mech_energy(&sys.stories(), &sys.u0, &sys.v0);
+    let final_ = sys.mech_energy(&run.stories, &y[..n], &y[n..2 * n]);
     let (input, damping) = (y[2 * n], y[2 * n + 1]);
     let contact = y[2 * n + 2] + run.contact_loss;
+    let hysteretic = run.stories.hysteretic_energy();
     let energy = EnergyAudit {
         initial,
         input,
         damping,
         contact,
+        hysteretic,
         final_,
-        balance_error: initial + input - damping - contact - final_,
+        balance_error: initial + input - damping - contact - hysteretic - final_,
     };
     let m = &scene.momentum;
     let settings = format!(
@@ -119,6 +130,10 @@ pub fn solve(scene: &Scene, history: Option<&mut History>) -> Result<RunOutput, 
             "off".into()
         }
     );
+    let mut buildings = tracker.finish();
+    for (bi, b) in buildings.iter_mut().enumerate() {
+        b.hysteretic_energy = run.stories.building_hysteretic_energy(bi);
+    }
     let mut stats = run.stats;
     stats.wall_seconds = clock.elapsed().as_secs_f64();
     Ok(RunOutput {
@@ -126,7 +141,7 @@ pub fn solve(scene: &Scene, history: Option<&mut History>) -> Result<RunOutput, 
         settings,
         scene: scene.name.clone(),
         duration: scene.duration,
-        buildings: tracker.finish(),
+        buildings,
         impacts: run.impacts,
         persistent_contacts: run.phases,
         energy,

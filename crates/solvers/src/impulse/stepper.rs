@@ -9,7 +9,8 @@ use structure::{MomentumOptions, Scene};
 use super::contact;
 use crate::gap::adaptive::{dense_overlaps, dense_peaks, kin};
 use crate::gap::dopri::Dopri5;
-use crate::gap::{Segment, System};
+use crate::gap::stories::Kink;
+use crate::gap::{Segment, Stories, System};
 use crate::momentum::events::Conv;
 use crate::momentum::impulse::{self, ContactGeom};
 use crate::momentum::stepper::{restitution, SIMULTANEOUS};
@@ -25,20 +26,28 @@ const EVENT_SAMPLES: usize = 4;
 /// Relative round-off band of the holding forces (as in the momentum method).
 const FORCE_BAND: f64 = 1e-9;
 
-/// The restoring forces −K u − C v (N) into `f`; returns the damping power vᵀ C v (W).
+/// The restoring forces −f_s(u) − C v (N) into `f` (f_s = K u for linear stories, the story
+/// law from the committed `stories` state for yielding ones: a pure trial); returns the
+/// damping power vᵀ C v (W).
 ///
-/// The one place where the impulse method calls [`System::internal`]: the story springs'
-/// state (yielding stories) enters here.
+/// The one place where the impulse method calls [`System::internal`].
 #[inline]
-fn restoring(sys: &System, u: &[f64], v: &[f64], f: &mut [f64]) -> f64 {
-    sys.internal(u, v, f)
+fn restoring(sys: &System, stories: &Stories, u: &[f64], v: &[f64], f: &mut [f64]) -> f64 {
+    sys.internal(stories, u, v, f)
 }
 
 /// Free acceleration (no contact force) into `acc`, with the ground acceleration `ag`;
 /// returns (input power −vᵀ M 1 a_g, damping power vᵀ C v), W.
 #[inline]
-fn free_acceleration(sys: &System, ag: f64, u: &[f64], v: &[f64], acc: &mut [f64]) -> (f64, f64) {
-    let pdamp = restoring(sys, u, v, acc);
+fn free_acceleration(
+    sys: &System,
+    stories: &Stories,
+    ag: f64,
+    u: &[f64],
+    v: &[f64],
+    acc: &mut [f64],
+) -> (f64, f64) {
+    let pdamp = restoring(sys, stories, u, v, acc);
     let mut pin = 0.0;
     for i in 0..sys.n {
         let f = sys.mass[i] * ag;
@@ -64,8 +73,10 @@ struct Held {
 /// Right-hand side of y = [u; v; E_input; E_damping; W_contact] with the held contacts
 /// `held` frozen: M ü = −K u − C u̇ − M 1 a_g − Σ_held G_cᵀ λ_c with λ = W⁻¹ G ü_free
 /// (so that G ü = 0 on the held contacts). `buf` holds 2·|held| numbers.
+#[allow(clippy::too_many_arguments)]
 fn rhs(
     sys: &System,
+    stories: &Stories,
     seg: &Segment,
     held: &Held,
     buf: &mut [f64],
@@ -79,7 +90,7 @@ fn rhs(
     let (ou, orest) = o.split_at_mut(n);
     ou.copy_from_slice(v);
     let (acc, extra) = orest.split_at_mut(n);
-    let (pin, pdamp) = free_acceleration(sys, seg.at(t), u, v, acc);
+    let (pin, pdamp) = free_acceleration(sys, stories, seg.at(t), u, v, acc);
     let k = held.set.len();
     let mut pc = 0.0;
     if k > 0 {
@@ -177,6 +188,8 @@ pub(crate) struct Run<'a> {
     geoms: Vec<ContactGeom>,
     /// y = [u; v; E_input; E_damping; W_contact].
     pub y: Vec<f64>,
+    /// Committed state of the yielding stories (empty for linear buildings).
+    pub stories: Stories,
     pub t: f64,
     held: Held,
     buf: Vec<f64>,
@@ -217,7 +230,7 @@ impl<'a> Run<'a> {
     fn free_relative(&self, set: &[usize], y: &[f64], ag: f64) -> (Vec<f64>, Vec<f64>) {
         let (sys, n) = (self.sys, self.n());
         let mut f = vec![0.0; n];
-        restoring(sys, &y[..n], &y[n..2 * n], &mut f);
+        restoring(sys, &self.stories, &y[..n], &y[n..2 * n], &mut f);
         let mut acc = vec![0.0; n];
         for i in 0..n {
             acc[i] = (f[i] - sys.mass[i] * ag) * sys.inv_mass[i];
@@ -308,9 +321,28 @@ impl<'a> Run<'a> {
         self.sys.contacts[c].rel(&self.y[n..2 * n])
     }
 
+    /// Commits the yielding stories at the current state (`kink`: the story kink located
+    /// at this state, if any). Called for every accepted state and after every change of the
+    /// state by an event (impulse, projection), never for a trial.
+    fn commit(&mut self, kink: Option<&Kink>) {
+        let n = self.n();
+        self.stories.commit(&self.y[..n], &self.y[n..2 * n], kink);
+    }
+
+    /// Mechanical energy (kinetic + recoverable strain) plus the hysteretic energy
+    /// dissipated so far, J, with the committed story state.
+    fn energy_with_hysteresis(&self) -> f64 {
+        let n = self.n();
+        self.sys
+            .mech_energy(&self.stories, &self.y[..n], &self.y[n..2 * n])
+            + self.stories.hysteretic_energy()
+    }
+
     /// Sets the relative velocity and the gap of the contacts `set` to zero: a plastic
     /// micro-impulse Δv = −M⁻¹Gᵀ W⁻¹ G v and the mass-weighted position correction
-    /// Δu = −M⁻¹Gᵀ W⁻¹ δ; the mechanical energy they remove goes to the contact account.
+    /// Δu = −M⁻¹Gᵀ W⁻¹ δ; the mechanical energy they remove goes to the contact account
+    /// (for a yielding story, net of the plastic work the correction does: the stories are
+    /// committed at the corrected state). The stories must be committed at the current state.
     fn project_held(&mut self, set: &[usize]) -> Result<(), SolverError> {
         if set.is_empty() {
             return Ok(());
@@ -325,12 +357,13 @@ impl<'a> Run<'a> {
             .map(|&c| sys.contacts[c].rel(&self.y[..n]) - sys.contacts[c].gap)
             .collect();
         let x = impulse::solve_delassus(&self.geoms, set, dgap, self.t, "held contacts")?;
-        let e0 = sys.mech_energy(&self.y[..n], &self.y[n..2 * n]);
+        let e0 = self.energy_with_hysteresis();
         let mut ws = contact::scale(sys, &self.y[..n]);
         let corr: Vec<(usize, f64)> = set.iter().copied().zip(x).collect();
         impulse::apply(&self.geoms, &corr, &mut ws);
         contact::unscale(sys, &ws, &mut self.y[..n]);
-        self.contact_loss += e0 - sys.mech_energy(&self.y[..n], &self.y[n..2 * n]);
+        self.commit(None);
+        self.contact_loss += e0 - self.energy_with_hysteresis();
         Ok(())
     }
 
@@ -414,6 +447,8 @@ impl<'a> Run<'a> {
         if !contacts.is_empty() {
             self.impulses(&contacts, &mut set_changed)?;
         }
+        // The velocities changed: the flow flags of yielding stories follow.
+        self.commit(None);
         if set_changed {
             self.held_changed()?;
         }
@@ -504,10 +539,12 @@ impl<'a> Run<'a> {
 }
 
 /// The earliest event of an accepted step: its θ and what it is.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone)]
 enum Event {
     Closure(Vec<usize>),
     Release(usize),
+    /// A kink of a yielding story (yield or unloading) before any contact event.
+    Kink(Kink),
 }
 
 /// Runs the impulse method on the assembled system.
@@ -537,6 +574,7 @@ pub(crate) fn run<'a>(
         pen: geoms.iter().map(|c| 1e-9 * c.gap.max(1e-3)).collect(),
         geoms,
         y,
+        stories: sys.stories(),
         t: 0.0,
         held: Held::default(),
         buf: Vec::new(),
@@ -569,9 +607,9 @@ pub(crate) fn run<'a>(
     let observe = |r: &Run, tracker: &mut ResponseTracker, history: Option<&mut History>, ag| {
         let (u, v) = (&r.y[..n], &r.y[n..2 * n]);
         if history.is_some() {
-            sys.observe_sample(tracker, u, v, &r.contact_forces(ag));
+            sys.observe_sample(&r.stories, tracker, u, v, &r.contact_forces(ag));
         } else {
-            sys.observe(tracker, u);
+            sys.observe(&r.stories, tracker, u);
         }
         tracker.sample(r.t, history);
     };
@@ -589,11 +627,21 @@ pub(crate) fn run<'a>(
     let mut interval = 0usize;
     let mut seg = sys.segment(0);
 
-    rhs(sys, &seg, &r.held, &mut r.buf, r.t, &r.y, &mut dp.k[0]);
+    rhs(
+        sys,
+        &r.stories,
+        &seg,
+        &r.held,
+        &mut r.buf,
+        r.t,
+        &r.y,
+        &mut dp.k[0],
+    );
     r.stats.rhs_evaluations += 1;
     let mut h = {
-        let (held, buf) = (&r.held, &mut r.buf);
-        let mut f = |tt: f64, yy: &[f64], o: &mut [f64]| rhs(sys, &seg, held, buf, tt, yy, o);
+        let (stories, held, buf) = (&r.stories, &r.held, &mut r.buf);
+        let mut f =
+            |tt: f64, yy: &[f64], o: &mut [f64]| rhs(sys, stories, &seg, held, buf, tt, yy, o);
         dp.initial_step(&mut f, r.t, &r.y.clone(), bp(0) - r.t)
     };
     r.stats.rhs_evaluations += 1;
@@ -609,7 +657,16 @@ pub(crate) fn run<'a>(
             if ratio < -1.0 {
                 let c = r.held.set[k];
                 r.release(c)?;
-                rhs(sys, &seg, &r.held, &mut r.buf, r.t, &r.y, &mut dp.k[0]);
+                rhs(
+                    sys,
+                    &r.stories,
+                    &seg,
+                    &r.held,
+                    &mut r.buf,
+                    r.t,
+                    &r.y,
+                    &mut dp.k[0],
+                );
                 r.stats.rhs_evaluations += 1;
                 continue;
             }
@@ -631,8 +688,9 @@ pub(crate) fn run<'a>(
             });
         }
         let err = {
-            let (held, buf) = (&r.held, &mut r.buf);
-            let mut f = |tt: f64, yy: &[f64], o: &mut [f64]| rhs(sys, &seg, held, buf, tt, yy, o);
+            let (stories, held, buf) = (&r.stories, &r.held, &mut r.buf);
+            let mut f =
+                |tt: f64, yy: &[f64], o: &mut [f64]| rhs(sys, stories, &seg, held, buf, tt, yy, o);
             dp.try_step(&mut f, t, &r.y, hs)
         };
         r.stats.rhs_evaluations += 6;
@@ -738,6 +796,21 @@ pub(crate) fn run<'a>(
             }
             _ => None,
         };
+        // Kinks of yielding stories before the earliest contact event (the gap element's
+        // search, [`Stories::locate_kink`]): the step is cut there, so that no step
+        // straddles a kink of the story law.
+        let event = if r.stories.is_empty() {
+            event
+        } else {
+            let limit = event.as_ref().map_or(1.0, |(th, _)| *th);
+            match r
+                .stories
+                .locate_kink(&dp, 0, n, limit, &mut r.stats.root_iterations)
+            {
+                Some(k) => Some((k.theta, Event::Kink(k))),
+                None => event,
+            }
+        };
 
         // --- peaks over the part of the step taken, then commit ------------------------
         let th_end = event.as_ref().map_or(1.0, |(th, _)| th.min(1.0));
@@ -746,7 +819,16 @@ pub(crate) fn run<'a>(
         } else {
             y_end.copy_from_slice(&dp.y1);
         }
-        dense_peaks(sys, &dp, &r.y, &y_end, th_end, &mut tracker, &mut scratch);
+        dense_peaks(
+            sys,
+            &r.stories,
+            &dp,
+            &r.y,
+            &y_end,
+            th_end,
+            &mut tracker,
+            &mut scratch,
+        );
         if !overlaps.is_empty() {
             dense_overlaps(sys, &dp, t, &r.y, &y_end, th_end, &mut overlaps);
         }
@@ -774,6 +856,13 @@ pub(crate) fn run<'a>(
         h = hnew;
 
         let mut restart = !(full && event.is_none() && r.held.set.is_empty());
+        // The accepted state: commit the yielding stories there (once the peaks over the
+        // step, which need the start-of-step law, are taken).
+        let kink = match &event {
+            Some((_, Event::Kink(k))) => Some(*k),
+            _ => None,
+        };
+        r.commit(kink.as_ref());
         // Held contacts: relative velocity and gap back to zero after every step.
         let held = r.held.set.clone();
         r.project_held(&held)?;
@@ -781,6 +870,7 @@ pub(crate) fn run<'a>(
         match &event {
             Some((_, Event::Release(c))) => r.release(*c)?,
             Some((_, Event::Closure(set))) => r.impact(set, ag)?,
+            Some((_, Event::Kink(_))) => r.stats.story_kinks += 1,
             None => {}
         }
         let landed = land && full;
@@ -802,7 +892,16 @@ pub(crate) fn run<'a>(
             }
         }
         if restart {
-            rhs(sys, &seg, &r.held, &mut r.buf, r.t, &r.y, &mut dp.k[0]);
+            rhs(
+                sys,
+                &r.stories,
+                &seg,
+                &r.held,
+                &mut r.buf,
+                r.t,
+                &r.y,
+                &mut dp.k[0],
+            );
             r.stats.rhs_evaluations += 1;
         }
     }
