@@ -3,7 +3,7 @@
 //! The momentum method's contact model (Conoscente, Hamburger & Johnson, eqs 19–24: rigid
 //! impact with a coefficient of restitution, the consistent impulse with the full mass
 //! matrix, persistent contact for c_r < 1) applied to the physical floor coordinates of the
-//! gap element's [`System`] instead of modal coordinates, and integrated between events by
+//! gap element's `System` instead of modal coordinates, and integrated between events by
 //! the adaptive Dormand–Prince 5(4) stepper ([`crate::gap::dopri`]) with dense output and
 //! event location. Nothing in it needs modal superposition: it is the method for buildings
 //! whose story springs are not linear (yielding stories, below).
@@ -31,11 +31,13 @@
 //!   window start), the same re-arming band (a contact just resolved is found closing only
 //!   at δ = 1e-9·max(gap, 1 mm) until its gap has opened beyond that band) and the same
 //!   simultaneity window (closures within 1e-12 s are solved together);
-//! - release of a held contact: min_c λ_c/band_c crosses −1, band_c = 1e-9 of the terms of
-//!   its free relative acceleration over W_cc (the momentum method's round-off band).
+//! - release of a held contact: min_c λ_c/band_c crosses −1, band_c = 1e-9 of the sizes of
+//!   the terms of its free relative acceleration (|f_l|/m_l + |a_g| at each floor, f the
+//!   restoring forces) over W_cc: the momentum method's round-off band. A contact whose
+//!   force is already below −band_c at a step start is released there.
 //!
-//! **Impacts** ([`stepper`]): the momentum method's rules, with its impulse code
-//! ([`crate::momentum::impulse`]) on mass-scaled velocities w = M^½ v ([`contact`]):
+//! **Impacts** (`stepper.rs`): the momentum method's rules, with its impulse code
+//! ([`crate::momentum::impulse`]) on mass-scaled velocities w = M^½ v (`contact.rs`):
 //! W_AA P_A = (1 + c_r) v_A on the impacting set (small LCP), Δv = −M⁻¹Gᵀ P; a contact
 //! approaching at most `momentum.capture_velocity` is touching (joins the held set if its
 //! holding force is compressive, grazes otherwise); chattering (three impact intervals
@@ -84,8 +86,8 @@
 //! `momentum.impulse` do not apply (all floors are kept; the consistent impulse with lumped
 //! masses is the paper's impulse, eqs 23–24, exactly).
 
-pub mod contact;
-pub mod stepper;
+mod contact;
+mod stepper;
 
 use structure::Scene;
 

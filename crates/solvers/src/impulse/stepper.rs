@@ -225,8 +225,9 @@ impl<'a> Run<'a> {
     }
 
     /// Relative accelerations G ü_free of the contacts `set` without contact forces, m/s²,
-    /// and for each the round-off band of its holding force, N (1e-9 of the magnitudes of
-    /// the terms, over W_cc).
+    /// and for each the round-off band of its holding force, N: 1e-9 × (|f_l|/m_l + |a_g|
+    /// plus the same at the right floor) / W_cc, f the restoring forces (the momentum
+    /// method's band, with the floors' forces in place of its modal terms).
     fn free_relative(&self, set: &[usize], y: &[f64], ag: f64) -> (Vec<f64>, Vec<f64>) {
         let (sys, n) = (self.sys, self.n());
         let mut f = vec![0.0; n];
