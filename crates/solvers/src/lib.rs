@@ -13,6 +13,7 @@
 //! between their answers comes from the contact treatment alone.
 
 pub mod gap;
+pub mod impulse;
 pub mod momentum;
 pub mod output;
 pub mod overlap;
@@ -34,6 +35,8 @@ pub enum Method {
     Momentum,
     /// The gap element (penalty) method.
     Gap,
+    /// The paper's impact law on the physical floor coordinates, adaptive integration.
+    Impulse,
 }
 
 impl std::fmt::Display for Method {
@@ -41,6 +44,7 @@ impl std::fmt::Display for Method {
         f.write_str(match self {
             Method::Momentum => "momentum",
             Method::Gap => "gap",
+            Method::Impulse => "impulse",
         })
     }
 }
@@ -110,6 +114,7 @@ pub fn run(
             out
         }),
         Method::Gap => gap::solve(scene, history),
+        Method::Impulse => impulse::solve(scene, history),
     }
 }
 

@@ -65,11 +65,12 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
-    /// Run one analysis of a scene with either method.
+    /// Run one analysis of a scene with one method (momentum, gap or impulse).
     Run {
         /// Scene file (TOML).
         scene: PathBuf,
-        /// Contact treatment: the paper's modal momentum method or the gap element.
+        /// Contact treatment: the paper's modal momentum method, the gap element, or the
+        /// paper's impact law on the physical floors (impulse).
         #[arg(long, value_enum)]
         method: MethodArg,
         /// Override a scene value: PATH=VALUE on a dotted TOML path (repeatable).
@@ -196,6 +197,7 @@ enum FormatArg {
 enum MethodArg {
     Momentum,
     Gap,
+    Impulse,
 }
 
 /// Largest `--threads` accepted: beyond it, starting the threads alone takes minutes.
@@ -351,6 +353,7 @@ fn run(cli: Cli) -> Result<()> {
             let method = match method {
                 MethodArg::Momentum => Method::Momentum,
                 MethodArg::Gap => Method::Gap,
+                MethodArg::Impulse => Method::Impulse,
             };
             if let (Method::Momentum, Some(n)) = (method, scene.momentum.modes) {
                 for b in scene.buildings.iter().filter(|b| b.n_floors() < n) {

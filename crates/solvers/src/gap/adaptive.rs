@@ -152,7 +152,14 @@ fn observe(
 /// δ, δ̇, δ̈ of contact `c` on the dense output.
 #[inline]
 /// (δ, δ̇) of a contact from the dense output at θ; `r = None` for a wall (u_r ≡ 0).
-fn kin(dp: &Dopri5, n: usize, l: usize, r: Option<usize>, gap: f64, th: f64) -> (f64, f64) {
+pub(crate) fn kin(
+    dp: &Dopri5,
+    n: usize,
+    l: usize,
+    r: Option<usize>,
+    gap: f64,
+    th: f64,
+) -> (f64, f64) {
     match r {
         Some(r) => (
             dp.dense(l, th) - dp.dense(r, th) - gap,
@@ -588,7 +595,7 @@ pub(crate) fn run_from(
 /// its rate turns from + to − over the step, at the interior maximum, located as in
 /// [`dense_peaks`] (Hermite estimate plus the |r₅|/16 slack against the running maximum,
 /// then bisection on the rate of the dense output). `t` is the step's start, s.
-fn dense_overlaps(
+pub(crate) fn dense_overlaps(
     sys: &System,
     dp: &Dopri5,
     t: f64,
@@ -644,7 +651,7 @@ fn dense_overlaps(
 /// rate of the dense output, and the building's floors there update the peaks. The dense
 /// output is the error-controlled interpolant of the step, so the peaks carry the
 /// integration tolerance, as the solution does.
-fn dense_peaks(
+pub(crate) fn dense_peaks(
     sys: &System,
     stories: &Stories,
     dp: &Dopri5,
