@@ -173,3 +173,65 @@ fn quick_yielding_study_obeys_its_closed_forms() {
     assert!(summary.contains("**Quick run**"), "{summary}");
     assert!(summary.contains("yielding_validity.png"));
 }
+
+/// A definition the study cannot use is refused before anything runs (exit 2), naming the
+/// file and the key; so is the momentum method as an "inelastic" method.
+#[test]
+fn bad_yielding_definitions_are_refused_naming_the_key() {
+    let root = STUDIES;
+    let good = std::fs::read_to_string(format!("{root}/yielding.toml"))
+        .unwrap()
+        .replace(
+            "\"paper/scene-aligned.toml\"",
+            &format!("\"{root}/paper/scene-aligned.toml\""),
+        )
+        .replace("\"../data/", &format!("\"{root}/../data/"));
+    let inelastic_line = good
+        .lines()
+        .find(|l| l.starts_with("inelastic"))
+        .unwrap()
+        .to_string();
+    let pga_line = good
+        .lines()
+        .find(|l| l.starts_with("quick_pga"))
+        .unwrap()
+        .to_string();
+    for (bad, words) in [
+        (
+            good.replace(&pga_line, "quick_pga = [0.6, 0.05]"),
+            &["yielding.toml", "quick_pga", "increasing"][..],
+        ),
+        (
+            good.replace(&inelastic_line, "inelastic = [\"momentum\"]"),
+            &["yielding.toml", "inelastic", "momentum"][..],
+        ),
+        (
+            good.replace(&inelastic_line, "inelastic = [\"newmark\"]"),
+            &["yielding.toml", "newmark"][..],
+        ),
+        (
+            format!("{good}\nstrength = 3\n"),
+            &["yielding.toml", "strength"][..],
+        ),
+    ] {
+        let d = TempDir::new("yielding-bad");
+        d.write("yielding.toml", &bad);
+        let out = d.path("results");
+        let o = common::pound(&[
+            "studies",
+            "run",
+            "yielding",
+            "--quick",
+            "--studies-dir",
+            d.path("").to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        for w in words {
+            assert!(err.contains(w), "{err:?} should name {w:?}");
+        }
+        assert!(!out.join("yielding").join("cases").exists());
+    }
+}
