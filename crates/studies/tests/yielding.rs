@@ -213,6 +213,14 @@ fn bad_yielding_definitions_are_refused_naming_the_key() {
             format!("{good}\nstrength = 3\n"),
             &["yielding.toml", "strength"][..],
         ),
+        (
+            good.replace(&inelastic_line, "inelastic = [\"gap\", \"gap\"]"),
+            &["yielding.toml", "inelastic", "twice"][..],
+        ),
+        (
+            good.replace("hardening_ratio = 0.02", "hardening_ratio = 1.0"),
+            &["yielding.toml", "hardening_ratio", "[0, 1)"][..],
+        ),
     ] {
         let d = TempDir::new("yielding-bad");
         d.write("yielding.toml", &bad);
