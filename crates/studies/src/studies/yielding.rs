@@ -1064,8 +1064,17 @@ impl Study for Yielding {
             ));
         }
         reading.push(format!(
-            "**Pounding and amplification** (tables `yielding`, `yielding_pounding`, rows {pga_hi} g): {}. Yielding stories cap the story shear near F_y (1 + b (μ − 1)), so a yielded building's shear cannot be amplified much; and the inelastic buildings need less separation without contact, so they pound on fewer records and less often.",
-            parts.join("; ")
+            "**Pounding and amplification** (tables `yielding`, `yielding_pounding`, rows {pga_hi} g): {}. Yielding stories cap the story shear near F_y (1 + b (μ − 1)), so a yielded building's shear cannot be amplified much{}.",
+            parts.join("; "),
+            match (
+                sp_at(0, li_hi, &|r| r.closure0).median,
+                sp_at(1, li_hi, &|r| r.closure0).median,
+            ) {
+                (Some(el), Some(inel)) if inel < el && pounding_n(1, li_hi) < pounding_n(0, li_hi) => {
+                    "; and the inelastic buildings need less separation without contact, so fewer records pound"
+                }
+                _ => "",
+            }
         ));
         let mut mu_parts = Vec::new();
         for mi in 0..ms.len() {
@@ -1137,10 +1146,24 @@ impl Study for Yielding {
             ));
         }
         reading.push(format!(
-            "**Domain of validity** (table `yielding_validity`, figure; departure e > {:.0} %). {}. So the linear modal method is within {:.0} % of the inelastic answer on most records only while the median demand stays near or below the strength (R ≲ 1); which records depart follows from their own elastic demand (next paragraph).",
+            "**Domain of validity** (table `yielding_validity`, figure; departure e > {:.0} %). {}. {}",
             100.0 * d.band,
             dom.join(". "),
-            100.0 * d.band
+            match crossings
+                .iter()
+                .filter_map(|c| c.3)
+                .reduce(f64::min)
+            {
+                Some(x) => format!(
+                    "So the linear modal method is within {:.0} % of the inelastic answer on most records only below {x:.2} g, i.e. R = {:.2} (median demand over strength); which records depart follows from their own elastic demand (next paragraph).",
+                    100.0 * d.band,
+                    r_of(x)
+                ),
+                None => format!(
+                    "The linear modal method stays within {:.0} % of the inelastic answer on most records at every level up to {pga_hi} g.",
+                    100.0 * d.band
+                ),
+            }
         ));
         let checks: Vec<String> = self_summary
             .iter()
