@@ -2,13 +2,14 @@
 #   make studies   regenerate every table and figure in results/
 #   make test      run the whole test suite
 #   make robustness  the long robustness sweep over every record (results/robustness)
+#   make yielding-strong  the yielding study of a stronger pair (results/yielding-strong)
 # Nothing else is needed on a fresh machine than a Rust toolchain (cargo): plots use a font
 # committed in data/fonts, so no system font or fontconfig package is required.
 
 CARGO ?= cargo
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 
-.PHONY: all build test studies robustness bench fmt clippy clean
+.PHONY: all build test studies robustness yielding-strong bench fmt clippy clean
 
 all: build
 
@@ -24,6 +25,11 @@ studies: build
 # The long robustness sweep (issue 9): 60 records x 4 gaps x 3 c_r x 3 solvers. Not in CI.
 robustness: build
 	./target/release/pound studies run robustness --fresh --out results
+
+# The yielding study with the strength at the median elastic demand at 0.40 g instead of
+# 0.15 g (studies/yielding-strong.toml): the pair pounds before it yields. Not in CI.
+yielding-strong: build
+	./target/release/pound studies run yielding-strong --fresh --out results
 
 bench:
 	$(CARGO) bench -p solvers

@@ -35,8 +35,10 @@ use crate::sweep::{
 };
 use crate::table::Table;
 
-/// Studies run only by name (long sweeps, not part of `--all` / `make studies`).
-pub const EXTRA: [&str; 1] = ["robustness"];
+/// Studies run only by name (long sweeps or variants, not part of `--all` /
+/// `make studies`): `yielding-strong` is the yielding study of a stronger pair
+/// (`studies/yielding-strong.toml`).
+pub const EXTRA: [&str; 2] = ["robustness", "yielding-strong"];
 
 /// All studies, in the order `--all` runs them.
 pub const NAMES: [&str; 9] = [
@@ -158,7 +160,7 @@ pub fn study(name: &str) -> Option<&'static dyn Study> {
         "stability" => &stability::Stability,
         "modelform" => &modelform::ModelForm,
         "robustness" => &robustness::Robustness,
-        "yielding" => &yielding::Yielding,
+        "yielding" | "yielding-strong" => &yielding::Yielding,
         _ => return None,
     })
 }

@@ -257,7 +257,8 @@ fn strength(ctx: &Ctx, d: &Def, recs: &[String]) -> Result<Strength> {
         }
         let run = solvers::run(&s, Method::Momentum, None).map_err(|e| {
             StudyError::Other(format!(
-                "study `yielding`: the elastic run that sets the strength failed on record `{rec}` at {} g: {e}",
+                "study `{}`: the elastic run that sets the strength failed on record `{rec}` at {} g: {e}",
+                ctx.name,
                 d.reference_pga
             ))
         })?;
@@ -1187,7 +1188,7 @@ impl Study for Yielding {
             d.gap,
         );
         reading.push(format!(
-            "**The elastic run tells whether it is inside the domain** (table `yielding_selfcheck`). On the {n_el} (record, level) pairs where the elastic run's demand stays below the strength in every story of both buildings (μ_el < 1, with and without pounding; {n_el_pound} of them pound) the inelastic methods give the elastic answer; above the strength most pairs depart by more than {:.0} %: {}.{}",
+            "**The elastic run tells whether it is inside the domain** (table `yielding_selfcheck`). On the {n_el} (record, level) pairs where the elastic run's demand stays below the strength in every story of both buildings (μ_el < 1, with and without pounding; {n_el_pound} of them pound) nothing can yield, so the departures there are integration error and, for the gap element, the error of its contact spring; above the strength most pairs depart by more than {:.0} %. Per inelastic method: {}.{}",
             100.0 * d.band,
             checks.join("; "),
             if n_el_pound == 0 {
@@ -1346,7 +1347,10 @@ impl Study for Yielding {
         let reading: Vec<String> = reading.into_iter().map(|r| format!("{r}\n\n")).collect();
         write_summary(
             ctx,
-            "Yielding buildings: the domain of validity of the linear modal method",
+            &format!(
+                "Yielding buildings: the domain of validity of the linear modal method (strength: the median elastic demand at {} g)",
+                d.reference_pga
+            ),
             &reading,
             &[&val_t, &self_t, &pound_t, &resp_t, &strength_t],
             &[(
