@@ -1,6 +1,6 @@
-//! The yielding study (`pound studies run yielding`) in its quick form (one record, 12 s,
-//! the `quick_pga` levels of `studies/yielding.toml`): it runs, is part of `--all`, and its
-//! tables obey the physics they rest on:
+//! The yielding study (`pound studies run yielding`, and its stronger pair
+//! `yielding-strong`) in its quick form (one record, 12 s, the `quick_pga` levels of the
+//! definition): it runs, and its tables obey the physics they rest on:
 //! - with one record the strength of every story is that record's own elastic demand at the
 //!   reference PGA, and the elastic response without contact is linear in the PGA, so the
 //!   elastic ductility demand without contact is R = PGA / reference PGA exactly (to the 6
@@ -20,8 +20,18 @@ fn num(s: &str) -> f64 {
 
 #[test]
 fn quick_yielding_study_obeys_its_closed_forms() {
-    let d = TempDir::new("yielding");
-    let dir = quick_study(&d, "yielding");
+    check_quick("yielding");
+}
+
+/// The stronger pair (strength at the median elastic demand at 0.40 g), run by name.
+#[test]
+fn quick_yielding_strong_study_obeys_its_closed_forms() {
+    check_quick("yielding-strong");
+}
+
+fn check_quick(study: &str) {
+    let d = TempDir::new(study);
+    let dir = quick_study(&d, study);
     for f in [
         "yielding.csv",
         "yielding.md",
@@ -38,7 +48,8 @@ fn quick_yielding_study_obeys_its_closed_forms() {
         assert!(dir.join(f).is_file(), "{f} missing");
     }
     let def: toml::Table = toml::from_str(
-        &std::fs::read_to_string(std::path::Path::new(STUDIES).join("yielding.toml")).unwrap(),
+        &std::fs::read_to_string(std::path::Path::new(STUDIES).join(format!("{study}.toml")))
+            .unwrap(),
     )
     .unwrap();
     let reference = def["reference_pga"].as_float().unwrap();
