@@ -20,6 +20,15 @@
 //!    (FSAL restarts).
 //! 4. Peak penetration and peak force of an episode are located on the dense output too
 //!    (roots of δ̇ and of dF/dt = F_δ δ̇ + F_δ̇ δ̈).
+//! 5. Yielding stories ([`super::stories`]): every stage evaluates the story law from the
+//!    state committed at the step start (pure), so a rejected step changes nothing. After
+//!    an accepted step the story kinks (a story's drift leaving its elastic range: yield; a
+//!    flowing story's drift rate changing sign: unloading) are located on the dense output
+//!    before the earliest contact event ([`Stories::locate_kink`]); the step is cut at the
+//!    earliest, the stories are committed there and f is re-evaluated (FSAL restarts), so no
+//!    step straddles a kink and the method keeps its order. Otherwise the stories are
+//!    committed at the end of the accepted part of the step. Peaks of a yielding building:
+//!    every interior drift extremum is located, and its shear taken from the law.
 
 use roots::Convergency;
 use structure::Scene;
@@ -651,6 +660,7 @@ pub(crate) fn dense_overlaps(
 /// rate of the dense output, and the building's floors there update the peaks. The dense
 /// output is the error-controlled interpolant of the step, so the peaks carry the
 /// integration tolerance, as the solution does.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn dense_peaks(
     sys: &System,
     stories: &Stories,

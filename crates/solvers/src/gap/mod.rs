@@ -3,10 +3,13 @@
 //! Physical coordinates: every floor of every building, displacements u and velocities v
 //! relative to the ground, floors of building 0 first. Per building the lumped mass M, the
 //! stiffness K applied in story form (V_j = k_j (u_j − u_{j−1})) and the classical damping
-//! C = `Building::damping_matrix(&modes)` (dense, identical to the momentum method's):
+//! C = `Building::damping_matrix(&modes)` (dense, identical to the momentum method's). A
+//! building with `story_law = "bilinear"` replaces k_j d_j by the story law's force
+//! V_j(d_j; history) ([`stories`]); its damping matrix stays the elastic building's
+//! (built from the modes of the initial stiffness, not updated when stories yield):
 //!
 //! ```text
-//! M ü + C u̇ + K u = −M 1 a_g(t) + Σ_contacts F_c (e_right − e_left)
+//! M ü + C u̇ + f_s(u) = −M 1 a_g(t) + Σ_contacts F_c (e_right − e_left),  f_s = K u if linear
 //! δ = u_left − u_right − gap   (closed while the law's event function g ≥ 0, see law.rs)
 //! ```
 //!
@@ -31,7 +34,10 @@
 //! `contact` = W_c + S₀ − S_T with W_c = ∫ Σ F δ̇ dt the work done on the contact elements
 //! and S the energy stored in closed contact springs (so the dashpot work and, for the
 //! clamped Kelvin–Voigt law, the spring energy released when the force vanishes with δ > 0),
-//! `final` = kinetic + strain + S_T, `initial` = kinetic + strain + S₀.
+//! `hysteretic` = Σ over yielding stories of the plastic work ∫ V du_p less the energy
+//! ½ α²/H still stored in the hardening spring, `final` = kinetic + strain + S_T,
+//! `initial` = kinetic + strain + S₀, the strain energy of a yielding story being its
+//! recoverable part ½ k₀ (d − u_p)² + ½ α²/H.
 
 pub mod adaptive;
 pub mod dopri;

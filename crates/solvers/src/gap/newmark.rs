@@ -8,6 +8,13 @@
 //!   the small block). The contact tangent (∂F/∂δ + (2/Δt) ∂F/∂δ̇) w wᵀ, w = e_left − e_right, of
 //!   the contacts active at the current iterate enters by the Woodbury identity with
 //!   Z = A⁻¹ W precomputed, so nothing is refactorised when the contact set changes.
+//! - Yielding stories ([`super::stories`]): inside the Newton iteration each story's force
+//!   and consistent tangent (k₀ elastic, b k₀ in flow) come from the return mapping of the
+//!   trial drift from the state committed at the step start; a yielding building's block of
+//!   A is refactorised with the tangents whenever the set of yielded stories of the iterate
+//!   changes (and Z with it). The stories are committed once the step has converged. The
+//!   kinks are not located: a step that crosses one carries O(Δt²) error in the energy
+//!   balance (the trapezoidal story work is exact only on one branch).
 //! - Contact state is judged from the iterate itself ([`super::law::Law::state_force`]): no
 //!   event location, a contact lasts a whole number of steps. For Hertz-damp the approach
 //!   speed δ̇⁻ is δ̇ at the start of the step in which the contact first carries force.
@@ -16,7 +23,8 @@
 //! - Impacts: closure time = the end of the first step with force, `relative_velocity_before`
 //!   = δ̇ at the start of that step, `relative_velocity_after` = δ̇ at the end of the first
 //!   step without force; impulse by the trapezoidal rule.
-//! - Energy: input Σ −Δuᵀ M 1 ā_g, damping Σ Δt v̄ᵀ C v̄, contact work Σ Δδ F̄ (trapezoidal
+//! - Energy: input Σ −Δuᵀ M 1 ā_g, damping Σ Δt v̄ᵀ C v̄, contact work Σ Δδ F̄, hysteretic and
+//!   recoverable story energy from the committed story state (trapezoidal
 //!   sums, exact for the linear part of the scheme, so the balance error is the energy the
 //!   scheme creates or destroys at the contacts).
 //! - Peak responses are taken where the event-driven solvers take them: at the record's

@@ -13,7 +13,7 @@
 //! Linear buildings keep V_j = k_j d_j on a fast path with exactly today's arithmetic, so a
 //! scene without yielding runs as fast and gives bit-identical results.
 //!
-//! Trial / commit: [`Stories::story_force`] and [`super::System::internal`] evaluate the law
+//! Trial / commit: [`Stories::story_force`] and `System::internal` evaluate the law
 //! from the *committed* state and change nothing (the six Dormand–Prince stages, the Newton
 //! iterates of a Newmark step and a rejected step are pure trials); a stepper calls
 //! [`Stories::commit`] once per accepted step (or located event), with the state it accepts.
