@@ -242,6 +242,7 @@ pub(crate) fn run_from(
         }
     }
     let stored0 = sys.stored(&y, |i| modes[i].closed);
+    stories.start(&y[..n], &y[n..2 * n]);
     let initial = sys.mech_energy(&stories, &y[..n], &y[n..2 * n]) + stored0;
 
     let mut tracker = ResponseTracker::new(scene);

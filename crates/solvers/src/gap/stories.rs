@@ -132,6 +132,9 @@ pub struct Stories {
     pub stories: Vec<Story>,
     /// Per building: index in `stories` of its first story, `None` for a linear building.
     first: Vec<Option<usize>>,
+    /// Hysteretic energy of each story at the start of the analysis, J (see
+    /// [`Stories::start`]; empty before).
+    h0: Vec<f64>,
 }
 
 impl Stories {
@@ -159,7 +162,31 @@ impl Stories {
                 }
             }
         }
-        Stories { stories, first }
+        Stories {
+            stories,
+            first,
+            h0: Vec::new(),
+        }
+    }
+
+    /// Commits the initial state (displacements `u0`, m, velocities `v0`, m/s, global) before
+    /// the first step. An initial drift beyond the yield drift puts the virgin spring on its
+    /// hardening branch there (the plastic drift it implies is history before t = 0: its
+    /// dissipation is not counted in [`Self::hysteretic_energy`], and the initial energy is
+    /// the recoverable energy of the committed state). Without it, every trial of the first
+    /// step would start from the virgin state, wrong if the drift then moves back.
+    pub fn start(&mut self, u0: &[f64], v0: &[f64]) {
+        self.commit(u0, v0, None);
+        self.h0 = self
+            .stories
+            .iter()
+            .map(|s| s.spring.hysteretic_energy())
+            .collect();
+    }
+
+    /// Hysteretic energy of story `k` since [`Self::start`], J.
+    fn story_hysteretic(&self, k: usize) -> f64 {
+        self.stories[k].spring.hysteretic_energy() - self.h0.get(k).copied().unwrap_or(0.0)
     }
 
     /// True when no building yields (the linear fast path everywhere).
@@ -363,25 +390,21 @@ impl Stories {
             .sum()
     }
 
-    /// Energy dissipated by yielding so far (plastic work less the hardening energy still
-    /// stored), all stories, J.
+    /// Energy dissipated by yielding since the start (plastic work less the hardening energy
+    /// still stored), all stories, J.
     pub fn hysteretic_energy(&self) -> f64 {
         if self.stories.is_empty() {
             return 0.0;
         }
-        self.stories
-            .iter()
-            .map(|s| s.spring.hysteretic_energy())
+        (0..self.stories.len())
+            .map(|k| self.story_hysteretic(k))
             .sum()
     }
 
     /// Hysteretic energy of building `b`, J; `None` for a linear building.
     pub fn building_hysteretic_energy(&self, b: usize) -> Option<f64> {
-        self.yielding(b).then(|| {
-            self.of_building(b)
-                .iter()
-                .map(|s| s.spring.hysteretic_energy())
-                .sum()
-        })
+        let f = self.first.get(b).copied().flatten()?;
+        let n = self.of_building(b).len();
+        Some((f..f + n).map(|k| self.story_hysteretic(k)).sum())
     }
 }
