@@ -408,3 +408,101 @@ impl Stories {
         Some((f..f + n).map(|k| self.story_hysteretic(k)).sum())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use structure::model::StoryLaw;
+    use structure::testing::free_scene;
+    use structure::Building;
+
+    /// One story, k₀ = 1 N/m, yield shear `fy` N (u_y = fy m), b = 0.1, on a unit mass.
+    fn one_story(fy: f64) -> Stories {
+        let mut b = Building::new("s", vec![1.0], vec![1.0], 0.0);
+        b.story_law = StoryLaw::Bilinear {
+            yield_shear: vec![fy],
+            hardening_ratio: 0.1,
+        };
+        Stories::new(&free_scene(vec![b], vec![], 1.0), &[0])
+    }
+
+    /// The dense output of one step of u'' = −u from (sin t0, cos t0) over [t0, t0 + h]
+    /// (its interpolant is within ~1e-4 of sin t for h ≤ 1, less accurate for longer steps).
+    fn harmonic_step(t0: f64, h: f64) -> Dopri5 {
+        let mut dp = Dopri5::new(2, 2, 1e-12, vec![1e-15; 2]);
+        let mut f = |_t: f64, y: &[f64], o: &mut [f64]| {
+            o[0] = y[1];
+            o[1] = -y[0];
+        };
+        let y = [t0.sin(), t0.cos()];
+        f(t0, &y, &mut dp.k[0]);
+        dp.try_step(&mut f, t0, &y, h);
+        dp.prepare_dense(t0, &y, h);
+        dp
+    }
+
+    #[test]
+    fn yield_and_unloading_kinks_are_located_on_the_dense_output() {
+        let mut st = one_story(0.5);
+        let mut calls = 0;
+        // Drift sin t leaves the elastic range [−0.5, 0.5] at t = asin(0.5) = π/6: on the
+        // interpolant to the root tolerance, on sin t to the interpolant's accuracy.
+        let h = 0.8;
+        let dp = harmonic_step(0.0, h);
+        let k = st.locate_kink(&dp, 0, 1, 1.0, &mut calls).unwrap();
+        assert_eq!((k.story, k.kind), (0, KinkKind::Yield));
+        assert!((dp.dense(0, k.theta) - 0.5).abs() < 1e-12);
+        assert!((k.theta * h - std::f64::consts::FRAC_PI_6).abs() < 1e-3);
+        // Not before an earlier event.
+        assert!(st.locate_kink(&dp, 0, 1, 0.5, &mut calls).is_none());
+        // Commit there: the story flows up.
+        let (u, v) = ([dp.dense(0, k.theta)], [dp.dense(1, k.theta)]);
+        st.commit(&u, &v, Some(&k));
+        assert_eq!(st.stories[0].flow, Flow::Up);
+        // Committed further up the flow at t = 1.2; the next step flows until the drift
+        // rate cos t vanishes at π/2: unloading.
+        st.commit(&[1.2f64.sin()], &[1.2f64.cos()], None);
+        assert_eq!(st.stories[0].flow, Flow::Up);
+        let dp = harmonic_step(1.2, h);
+        let before = st.stories[0].spring.state();
+        let k = st.locate_kink(&dp, 0, 1, 1.0, &mut calls).unwrap();
+        assert_eq!(k.kind, KinkKind::Unload);
+        assert!(dp.dense(1, k.theta).abs() < 1e-12);
+        assert!((1.2 + k.theta * h - std::f64::consts::FRAC_PI_2).abs() < 1e-3);
+        // The search is pure; the commit at the kink makes the story elastic again, its
+        // range ending at the peak drift, 2 F_y/k₀ wide.
+        assert_eq!(st.stories[0].spring.state(), before);
+        let peak = dp.dense(0, k.theta);
+        st.commit(&[peak], &[dp.dense(1, k.theta)], Some(&k));
+        assert_eq!(st.stories[0].flow, Flow::Elastic);
+        let (lo, hi) = st.stories[0].spring.elastic_range();
+        assert!(
+            (hi - peak).abs() < 1e-12 && (hi - lo - 1.0).abs() < 1e-12,
+            "{lo} {hi}"
+        );
+        assert!(st.hysteretic_energy() > 0.0);
+        // Unloading from there stays elastic for the next step: no kink.
+        let dp = harmonic_step(std::f64::consts::FRAC_PI_2, 0.5);
+        assert!(st.locate_kink(&dp, 0, 1, 1.0, &mut calls).is_none());
+    }
+
+    #[test]
+    fn an_excursion_out_of_the_range_and_back_between_samples_is_caught() {
+        // u_y = 0.995: the drift sin t over a step of 1.2 whose samples straddle π/2 at
+        // ±0.15 (sin = 0.9888) is inside the range at every sample but peaks at 1: the
+        // interior extremum is checked and the crossing of 0.995 before it located.
+        let st = one_story(0.995);
+        let mut calls = 0;
+        let h = 1.2;
+        let t0 = std::f64::consts::FRAC_PI_2 - 0.15 - 0.3;
+        let dp = harmonic_step(t0, h);
+        for j in 0..=4 {
+            assert!(dp.dense(0, j as f64 / 4.0) < 0.995, "sample {j} inside");
+        }
+        let k = st.locate_kink(&dp, 0, 1, 1.0, &mut calls).unwrap();
+        assert_eq!(k.kind, KinkKind::Yield);
+        assert!((dp.dense(0, k.theta) - 0.995).abs() < 1e-12);
+        assert!(dp.dense(1, k.theta) > 0.0, "the crossing on the way up");
+        assert!((t0 + k.theta * h - 0.995f64.asin()).abs() < 1e-2);
+    }
+}
