@@ -106,6 +106,55 @@ impl Story {
     }
 }
 
+/// True when the drift of story `s` provably stays inside the committed elastic range over
+/// the whole step of `dp` (a cheap pre-check that skips the kink search; conservative, so
+/// it never changes a result). The dense output of a component is the cubic Hermite
+/// interpolant H(θ) of its end values and end rates plus r₅ θ²(1−θ)², |r₅ θ²(1−θ)²| ≤
+/// |r₅|/16; the extremes of H on [0, 1] lie at the ends or at the roots of H′ (a
+/// quadratic), so [min H − |r₅|/16, max H + |r₅|/16] encloses the drift.
+fn stays_inside(s: &Story, dp: &Dopri5, u_off: usize) -> bool {
+    let (i, b) = (u_off + s.floor, s.below.map(|b| u_off + b));
+    let comb = |f: &dyn Fn(usize) -> f64| f(i) - b.map_or(0.0, f);
+    let y0 = comb(&|k| dp.dense(k, 0.0));
+    let y1 = comb(&|k| dp.dense(k, 1.0));
+    // End slopes in θ: h·(rate of the dense output).
+    let m0 = dp.h * comb(&|k| dp.dense_rate(k, 0.0));
+    let m1 = dp.h * comb(&|k| dp.dense_rate(k, 1.0));
+    let r5 = comb(&|k| dp.quartic(k)).abs() / 16.0;
+    // H(θ) = y0 + c1 θ + c2 θ² + c3 θ³.
+    let c1 = m0;
+    let c2 = -3.0 * y0 - 2.0 * m0 + 3.0 * y1 - m1;
+    let c3 = 2.0 * y0 + m0 - 2.0 * y1 + m1;
+    let h_at = |t: f64| y0 + t * (c1 + t * (c2 + t * c3));
+    let (mut lo_h, mut hi_h) = (y0.min(y1), y0.max(y1));
+    // Roots of H′ = c1 + 2 c2 θ + 3 c3 θ² in (0, 1).
+    let (qa, qb, qc) = (3.0 * c3, 2.0 * c2, c1);
+    let mut roots = [f64::NAN; 2];
+    if qa.abs() > 1e-300 {
+        let disc = qb * qb - 4.0 * qa * qc;
+        if disc >= 0.0 {
+            let sq = disc.sqrt();
+            roots = [(-qb - sq) / (2.0 * qa), (-qb + sq) / (2.0 * qa)];
+        }
+    } else if qb != 0.0 {
+        roots[0] = -qc / qb;
+    }
+    for t in roots {
+        if t > 0.0 && t < 1.0 {
+            let v = h_at(t);
+            lo_h = lo_h.min(v);
+            hi_h = hi_h.max(v);
+        }
+    }
+    if !(lo_h.is_finite() && hi_h.is_finite() && r5.is_finite()) {
+        return false;
+    }
+    // Margin for the round-off of the bound itself.
+    let (lo, hi) = s.spring.elastic_range();
+    let margin = 1e-12 * (hi.abs() + lo.abs() + hi_h.abs() + lo_h.abs());
+    hi_h + r5 + margin < hi && lo_h - r5 - margin > lo
+}
+
 /// Which kink a stepper located.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum KinkKind {
@@ -309,6 +358,7 @@ impl Stories {
                 dp.dense(v_off + s.floor, th) - s.below.map_or(0.0, |b| dp.dense(v_off + b, th))
             };
             let found = match s.flow {
+                Flow::Elastic if stays_inside(s, dp, u_off) => None,
                 Flow::Elastic => {
                     let eps = s.slack();
                     let g_at = |th: f64| s.inside(d_at(th));
