@@ -678,8 +678,10 @@ fn dense_peaks(
                 let below = if story && j > 0 { Some(i - 1) } else { None };
                 // A yielding story: its drift (the law's shear is monotone in the drift along
                 // a branch and the step crosses no kink, so the shear's extremes lie at the
-                // drift's); every interior extremum is located (a smaller drift may carry a
-                // larger shear once the story has yielded).
+                // drift's); an interior extremum is located unless the bounds of the drift
+                // over the step ([`super::stories::drift_bounds`]) show that neither the
+                // drift nor the law's shear there can reach its running peak (a smaller drift
+                // may carry a larger shear once the story has yielded).
                 let sc = if story && !yielding {
                     sys.story_k[i]
                 } else {
@@ -691,6 +693,21 @@ fn dense_peaks(
                 let Some((_, h)) = crate::response::hermite_extremum(y0, yd0, ye, yde, len) else {
                     continue;
                 };
+                if story && yielding && th_end >= 1.0 {
+                    // The law's shear is monotone in the drift (tangent k₀ or b k₀ ≥ 0), so
+                    // over the step it lies between its values at the drift's bounds.
+                    if let Some((lo, hi)) = super::stories::drift_bounds(dp, i, below) {
+                        let (v_lo, v_hi) = (
+                            stories.story_force(bi, j, lo).0,
+                            stories.story_force(bi, j, hi).0,
+                        );
+                        if v_lo.abs().max(v_hi.abs()) < tracker.peak(bi, j).0
+                            && lo.abs().max(hi.abs()) < tracker.peak_drift(bi, j)
+                        {
+                            continue;
+                        }
+                    }
+                }
                 if !(story && yielding) {
                     let (vmax, dmax) = tracker.peak(bi, j);
                     let peak = if story { vmax } else { dmax };

@@ -106,15 +106,14 @@ impl Story {
     }
 }
 
-/// True when the drift of story `s` provably stays inside the committed elastic range over
-/// the whole step of `dp` (a cheap pre-check that skips the kink search; conservative, so
-/// it never changes a result). The dense output of a component is the cubic Hermite
-/// interpolant H(θ) of its end values and end rates plus r₅ θ²(1−θ)², |r₅ θ²(1−θ)²| ≤
-/// |r₅|/16; the extremes of H on [0, 1] lie at the ends or at the roots of H′ (a
-/// quadratic), so [min H − |r₅|/16, max H + |r₅|/16] encloses the drift.
-fn stays_inside(s: &Story, dp: &Dopri5, u_off: usize) -> bool {
-    let (i, b) = (u_off + s.floor, s.below.map(|b| u_off + b));
-    let comb = |f: &dyn Fn(usize) -> f64| f(i) - b.map_or(0.0, f);
+/// Bounds (min, max) of the drift u_i − u_below (m) over the whole step of `dp` (`i`,
+/// `below`: state components of the floor above and below, `None` for the ground). The dense
+/// output of a component is the cubic Hermite interpolant H(θ) of its end values and end
+/// rates plus r₅ θ²(1−θ)², |r₅ θ²(1−θ)²| ≤ |r₅|/16; the extremes of H on [0, 1] lie at the
+/// ends or at the roots of H′ (a quadratic), so [min H − |r₅|/16, max H + |r₅|/16] (widened
+/// by a round-off margin) encloses the drift. `None` if anything is not finite.
+pub fn drift_bounds(dp: &Dopri5, i: usize, below: Option<usize>) -> Option<(f64, f64)> {
+    let comb = |f: &dyn Fn(usize) -> f64| f(i) - below.map_or(0.0, f);
     let y0 = comb(&|k| dp.dense(k, 0.0));
     let y1 = comb(&|k| dp.dense(k, 1.0));
     // End slopes in θ: h·(rate of the dense output).
@@ -126,7 +125,7 @@ fn stays_inside(s: &Story, dp: &Dopri5, u_off: usize) -> bool {
     let c2 = -3.0 * y0 - 2.0 * m0 + 3.0 * y1 - m1;
     let c3 = 2.0 * y0 + m0 - 2.0 * y1 + m1;
     let h_at = |t: f64| y0 + t * (c1 + t * (c2 + t * c3));
-    let (mut lo_h, mut hi_h) = (y0.min(y1), y0.max(y1));
+    let (mut lo, mut hi) = (y0.min(y1), y0.max(y1));
     // Roots of H′ = c1 + 2 c2 θ + 3 c3 θ² in (0, 1).
     let (qa, qb, qc) = (3.0 * c3, 2.0 * c2, c1);
     let mut roots = [f64::NAN; 2];
@@ -142,17 +141,23 @@ fn stays_inside(s: &Story, dp: &Dopri5, u_off: usize) -> bool {
     for t in roots {
         if t > 0.0 && t < 1.0 {
             let v = h_at(t);
-            lo_h = lo_h.min(v);
-            hi_h = hi_h.max(v);
+            lo = lo.min(v);
+            hi = hi.max(v);
         }
     }
-    if !(lo_h.is_finite() && hi_h.is_finite() && r5.is_finite()) {
+    let margin = r5 + 1e-12 * (lo.abs() + hi.abs());
+    (lo.is_finite() && hi.is_finite() && margin.is_finite()).then_some((lo - margin, hi + margin))
+}
+
+/// True when the drift of story `s` provably stays inside the committed elastic range over
+/// the whole step of `dp` ([`drift_bounds`]): a cheap pre-check that skips the kink search,
+/// conservative, so it never changes a result.
+fn stays_inside(s: &Story, dp: &Dopri5, u_off: usize) -> bool {
+    let Some((d_lo, d_hi)) = drift_bounds(dp, u_off + s.floor, s.below.map(|b| u_off + b)) else {
         return false;
-    }
-    // Margin for the round-off of the bound itself.
+    };
     let (lo, hi) = s.spring.elastic_range();
-    let margin = 1e-12 * (hi.abs() + lo.abs() + hi_h.abs() + lo_h.abs());
-    hi_h + r5 + margin < hi && lo_h - r5 - margin > lo
+    d_hi < hi && d_lo > lo
 }
 
 /// Which kink a stepper located.
