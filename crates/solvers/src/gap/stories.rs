@@ -280,7 +280,15 @@ impl Stories {
     #[inline]
     pub fn story_force(&self, b: usize, j: usize, d: f64) -> (f64, f64) {
         let f = self.first[b].expect("story_force on a linear building");
-        let t = self.stories[f + j].spring.evaluate(d);
+        let spring = &self.stories[f + j].spring;
+        // The elastic answer first (the common case, the same arithmetic as
+        // `Bilinear::evaluate`), the return mapping only beyond the range.
+        let (p, c) = (&spring.params, spring.state());
+        let f_trial = p.stiffness * (d - c.plastic_drift);
+        if (f_trial - c.back_force).abs() <= p.yield_shear {
+            return (f_trial, p.stiffness);
+        }
+        let t = spring.evaluate(d);
         (t.force, t.tangent)
     }
 
