@@ -28,7 +28,9 @@
 //!    earliest, the stories are committed there and f is re-evaluated (FSAL restarts), so no
 //!    step straddles a kink and the method keeps its order. Otherwise the stories are
 //!    committed at the end of the accepted part of the step. Peaks of a yielding building:
-//!    every interior drift extremum is located, and its shear taken from the law.
+//!    the interior drift extrema are located (unless the drift's bounds over the step show
+//!    that neither drift nor shear can reach its running peak) and the shear there taken
+//!    from the law.
 
 use roots::Convergency;
 use structure::Scene;
