@@ -255,3 +255,42 @@ fn a_story_that_never_yields_gives_the_linear_answer() {
         }
     }
 }
+
+#[test]
+fn an_initial_drift_beyond_yield_starts_on_the_yield_surface() {
+    // Elastic–perfectly-plastic (b = 0) story released from rest at d₀ = 3 u_y: the initial
+    // state is committed on the yield surface (plastic drift u_p = d₀ − u_y), so the story
+    // unloads elastically: d(t) = u_p + u_y cos ωt, no further dissipation. A quarter period
+    // later d = u_p = 2 u_y and v = −ω u_y; the energy ½ k₀ u_y² is kept. (Trials from the
+    // virgin state would push with F_y all the way back to u_y instead.)
+    let w = (K0 / M).sqrt();
+    let uy = FY / K0;
+    let quarter = 0.25 * 2.0 * std::f64::consts::PI / w;
+    for integrator in [Integrator::Adaptive, Integrator::Newmark] {
+        let mut s = oscillator(0.0, quarter);
+        s.buildings[0].initial_velocity = vec![0.0];
+        s.buildings[0].initial_displacement = vec![3.0 * uy];
+        s.gap_element.integrator = integrator;
+        s.gap_element.tolerance = 1e-10;
+        let dt = 2.0 * std::f64::consts::PI / w / 4000.0;
+        s.gap_element.time_step = dt;
+        let tol = match integrator {
+            Integrator::Adaptive => 1e-7,
+            Integrator::Newmark => (w * dt).powi(2),
+        };
+        let out = gap::solve(&s, None).unwrap();
+        let (r, e) = (&out.buildings[0], &out.energy);
+        let what = format!("{integrator:?}: {r:?} {e:?}");
+        let e_el = 0.5 * K0 * uy * uy;
+        assert!(rel(e.initial, e_el) < 1e-12, "initial energy, {what}");
+        assert!(rel(r.residual_drift[0], 2.0 * uy) < tol, "{what}");
+        assert!(rel(r.story_drift_max[0], 3.0 * uy) < 1e-12, "{what}");
+        assert!(rel(r.story_shear_max[0], FY) < 1e-12, "{what}");
+        assert!(
+            e.hysteretic.abs() < tol * e_el,
+            "no dissipation after t = 0, {what}"
+        );
+        assert!(rel(e.final_, e_el) < tol, "{what}");
+        assert!(e.balance_error.abs() < tol * e_el, "{what}");
+    }
+}

@@ -18,7 +18,9 @@
 //!   parameters a1…a4 are left at their defaults, a1 = a3 = 0: none). Its trial answer is
 //!   the elastic predictor from the committed state clamped to the hardening lines
 //!   V = ±(1 − b) F_y + b k₀ d, the same return mapping as pound's, and pound's damping
-//!   matrix stays the elastic building's, as the modal damping here.
+//!   matrix stays the elastic building's, as the modal damping here. An initial drift
+//!   beyond the yield drift is a caveat ([`opensees_caveats`]): pound commits the story on
+//!   its yield surface at t = 0, Steel01 answers the first step from its virgin state.
 //! - Damping: classical modal damping C = M Φ diag(2ζω) Φᵀ M, the matrix both pound solvers
 //!   use, through OpenSees' `modalDamping` after `eigen('-fullGenLapack', N)` with *all* N
 //!   modes of the model. The buildings are uncoupled when the eigen analysis runs (contacts
@@ -123,6 +125,28 @@ pub fn opensees_caveats(scene: &Scene) -> Vec<String> {
              `--set gap_element.tension=true`"
                 .into(),
         );
+    }
+    for b in &scene.buildings {
+        let Some(params) = b.story_law.bilinear_params(&b.story_stiffness) else {
+            continue;
+        };
+        let mut below = 0.0;
+        for (j, (p, &u)) in params.iter().zip(&b.initial_displacement).enumerate() {
+            if (u - below).abs() > p.yield_drift() {
+                w.push(format!(
+                    "building `{}` story {}: the initial drift {:.4e} m exceeds the yield drift \
+                     {:.4e} m; pound starts the story on its yield surface, while OpenSees' \
+                     Steel01 answers the first step from its virgin state, so the first steps \
+                     will differ",
+                    b.name,
+                    j + 1,
+                    u - below,
+                    p.yield_drift()
+                ));
+                break;
+            }
+            below = u;
+        }
     }
     w
 }

@@ -14,7 +14,7 @@ use std::process::Command;
 
 use solvers::Method;
 use structure::Scene;
-use studies::export::opensees_script;
+use studies::export::{opensees_caveats, opensees_script};
 
 mod common;
 use common::{pound, TempDir};
@@ -83,6 +83,25 @@ fn a_bilinear_story_is_exported_as_steel01() {
     }
     let script = opensees_script(&lin).unwrap();
     assert_eq!(script.matches("\"yield_shear\": None,").count(), 2);
+}
+
+#[test]
+fn an_initial_drift_beyond_yield_is_a_caveat() {
+    let r = reference();
+    let mut s = scene(&r);
+    assert!(
+        opensees_caveats(&s).is_empty(),
+        "{:?}",
+        opensees_caveats(&s)
+    );
+    // Story 2 of building2: drift 0.02 m against a yield drift 5e7 N / k₂ ≈ 0.01 m or less.
+    let k = s.buildings[1].story_stiffness[1];
+    assert!(0.02 > 5e7 / k, "the drift is beyond yield");
+    s.buildings[1].initial_displacement[0] = 0.0;
+    s.buildings[1].initial_displacement[1] = 0.02;
+    let w = opensees_caveats(&s);
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(w[0].contains("building2") && w[0].contains("story 2") && w[0].contains("Steel01"));
 }
 
 #[test]

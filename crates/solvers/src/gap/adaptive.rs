@@ -28,7 +28,9 @@
 //!    earliest, the stories are committed there and f is re-evaluated (FSAL restarts), so no
 //!    step straddles a kink and the method keeps its order. Otherwise the stories are
 //!    committed at the end of the accepted part of the step. Peaks of a yielding building:
-//!    every interior drift extremum is located, and its shear taken from the law.
+//!    the interior drift extrema are located (unless the drift's bounds over the step show
+//!    that neither drift nor shear can reach its running peak) and the shear there taken
+//!    from the law.
 
 use roots::Convergency;
 use structure::Scene;
@@ -249,6 +251,7 @@ pub(crate) fn run_from(
         }
     }
     let stored0 = sys.stored(&y, |i| modes[i].closed);
+    stories.start(&y[..n], &y[n..2 * n]);
     let initial = sys.mech_energy(&stories, &y[..n], &y[n..2 * n]) + stored0;
 
     let mut tracker = ResponseTracker::new(scene);
@@ -684,8 +687,10 @@ pub(crate) fn dense_peaks(
                 let below = if story && j > 0 { Some(i - 1) } else { None };
                 // A yielding story: its drift (the law's shear is monotone in the drift along
                 // a branch and the step crosses no kink, so the shear's extremes lie at the
-                // drift's); every interior extremum is located (a smaller drift may carry a
-                // larger shear once the story has yielded).
+                // drift's); an interior extremum is located unless the bounds of the drift
+                // over the step ([`super::stories::drift_bounds`]) show that neither the
+                // drift nor the law's shear there can reach its running peak (a smaller drift
+                // may carry a larger shear once the story has yielded).
                 let sc = if story && !yielding {
                     sys.story_k[i]
                 } else {
@@ -697,6 +702,21 @@ pub(crate) fn dense_peaks(
                 let Some((_, h)) = crate::response::hermite_extremum(y0, yd0, ye, yde, len) else {
                     continue;
                 };
+                if story && yielding && th_end >= 1.0 {
+                    // The law's shear is monotone in the drift (tangent k₀ or b k₀ ≥ 0), so
+                    // over the step it lies between its values at the drift's bounds.
+                    if let Some((lo, hi)) = super::stories::drift_bounds(dp, i, below) {
+                        let (v_lo, v_hi) = (
+                            stories.story_force(bi, j, lo).0,
+                            stories.story_force(bi, j, hi).0,
+                        );
+                        if v_lo.abs().max(v_hi.abs()) < tracker.peak(bi, j).0
+                            && lo.abs().max(hi.abs()) < tracker.peak_drift(bi, j)
+                        {
+                            continue;
+                        }
+                    }
+                }
                 if !(story && yielding) {
                     let (vmax, dmax) = tracker.peak(bi, j);
                     let peak = if story { vmax } else { dmax };

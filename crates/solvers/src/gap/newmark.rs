@@ -166,6 +166,7 @@ pub(crate) fn run(
         }
     }
     let stored0 = sys.stored(&u, |i| active[i]);
+    stories.start(&u, &v);
     let initial = sys.mech_energy(&stories, &u, &v) + stored0;
     let mut ag = sys.ground_at(0.0);
     sys.internal(&stories, &u, &v, &mut f);

@@ -106,6 +106,60 @@ impl Story {
     }
 }
 
+/// Bounds (min, max) of the drift u_i − u_below (m) over the whole step of `dp` (`i`,
+/// `below`: state components of the floor above and below, `None` for the ground). The dense
+/// output of a component is the cubic Hermite interpolant H(θ) of its end values and end
+/// rates plus r₅ θ²(1−θ)², |r₅ θ²(1−θ)²| ≤ |r₅|/16; the extremes of H on [0, 1] lie at the
+/// ends or at the roots of H′ (a quadratic), so [min H − |r₅|/16, max H + |r₅|/16] (widened
+/// by a round-off margin) encloses the drift. `None` if anything is not finite.
+pub fn drift_bounds(dp: &Dopri5, i: usize, below: Option<usize>) -> Option<(f64, f64)> {
+    let comb = |f: &dyn Fn(usize) -> f64| f(i) - below.map_or(0.0, f);
+    let y0 = comb(&|k| dp.dense(k, 0.0));
+    let y1 = comb(&|k| dp.dense(k, 1.0));
+    // End slopes in θ: h·(rate of the dense output).
+    let m0 = dp.h * comb(&|k| dp.dense_rate(k, 0.0));
+    let m1 = dp.h * comb(&|k| dp.dense_rate(k, 1.0));
+    let r5 = comb(&|k| dp.quartic(k)).abs() / 16.0;
+    // H(θ) = y0 + c1 θ + c2 θ² + c3 θ³.
+    let c1 = m0;
+    let c2 = -3.0 * y0 - 2.0 * m0 + 3.0 * y1 - m1;
+    let c3 = 2.0 * y0 + m0 - 2.0 * y1 + m1;
+    let h_at = |t: f64| y0 + t * (c1 + t * (c2 + t * c3));
+    let (mut lo, mut hi) = (y0.min(y1), y0.max(y1));
+    // Roots of H′ = c1 + 2 c2 θ + 3 c3 θ² in (0, 1).
+    let (qa, qb, qc) = (3.0 * c3, 2.0 * c2, c1);
+    let mut roots = [f64::NAN; 2];
+    if qa.abs() > 1e-300 {
+        let disc = qb * qb - 4.0 * qa * qc;
+        if disc >= 0.0 {
+            let sq = disc.sqrt();
+            roots = [(-qb - sq) / (2.0 * qa), (-qb + sq) / (2.0 * qa)];
+        }
+    } else if qb != 0.0 {
+        roots[0] = -qc / qb;
+    }
+    for t in roots {
+        if t > 0.0 && t < 1.0 {
+            let v = h_at(t);
+            lo = lo.min(v);
+            hi = hi.max(v);
+        }
+    }
+    let margin = r5 + 1e-12 * (lo.abs() + hi.abs());
+    (lo.is_finite() && hi.is_finite() && margin.is_finite()).then_some((lo - margin, hi + margin))
+}
+
+/// True when the drift of story `s` provably stays inside the committed elastic range over
+/// the whole step of `dp` ([`drift_bounds`]): a cheap pre-check that skips the kink search,
+/// conservative, so it never changes a result.
+fn stays_inside(s: &Story, dp: &Dopri5, u_off: usize) -> bool {
+    let Some((d_lo, d_hi)) = drift_bounds(dp, u_off + s.floor, s.below.map(|b| u_off + b)) else {
+        return false;
+    };
+    let (lo, hi) = s.spring.elastic_range();
+    d_hi < hi && d_lo > lo
+}
+
 /// Which kink a stepper located.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum KinkKind {
@@ -132,6 +186,9 @@ pub struct Stories {
     pub stories: Vec<Story>,
     /// Per building: index in `stories` of its first story, `None` for a linear building.
     first: Vec<Option<usize>>,
+    /// Hysteretic energy of each story at the start of the analysis, J (see
+    /// [`Stories::start`]; empty before).
+    h0: Vec<f64>,
 }
 
 impl Stories {
@@ -159,7 +216,31 @@ impl Stories {
                 }
             }
         }
-        Stories { stories, first }
+        Stories {
+            stories,
+            first,
+            h0: Vec::new(),
+        }
+    }
+
+    /// Commits the initial state (displacements `u0`, m, velocities `v0`, m/s, global) before
+    /// the first step. An initial drift beyond the yield drift puts the virgin spring on its
+    /// hardening branch there (the plastic drift it implies is history before t = 0: its
+    /// dissipation is not counted in [`Self::hysteretic_energy`], and the initial energy is
+    /// the recoverable energy of the committed state). Without it, every trial of the first
+    /// step would start from the virgin state, wrong if the drift then moves back.
+    pub fn start(&mut self, u0: &[f64], v0: &[f64]) {
+        self.commit(u0, v0, None);
+        self.h0 = self
+            .stories
+            .iter()
+            .map(|s| s.spring.hysteretic_energy())
+            .collect();
+    }
+
+    /// Hysteretic energy of story `k` since [`Self::start`], J.
+    fn story_hysteretic(&self, k: usize) -> f64 {
+        self.stories[k].spring.hysteretic_energy() - self.h0.get(k).copied().unwrap_or(0.0)
     }
 
     /// True when no building yields (the linear fast path everywhere).
@@ -199,7 +280,15 @@ impl Stories {
     #[inline]
     pub fn story_force(&self, b: usize, j: usize, d: f64) -> (f64, f64) {
         let f = self.first[b].expect("story_force on a linear building");
-        let t = self.stories[f + j].spring.evaluate(d);
+        let spring = &self.stories[f + j].spring;
+        // The elastic answer first (the common case, the same arithmetic as
+        // `Bilinear::evaluate`), the return mapping only beyond the range.
+        let (p, c) = (&spring.params, spring.state());
+        let f_trial = p.stiffness * (d - c.plastic_drift);
+        if (f_trial - c.back_force).abs() <= p.yield_shear {
+            return (f_trial, p.stiffness);
+        }
+        let t = spring.evaluate(d);
         (t.force, t.tangent)
     }
 
@@ -282,6 +371,7 @@ impl Stories {
                 dp.dense(v_off + s.floor, th) - s.below.map_or(0.0, |b| dp.dense(v_off + b, th))
             };
             let found = match s.flow {
+                Flow::Elastic if stays_inside(s, dp, u_off) => None,
                 Flow::Elastic => {
                     let eps = s.slack();
                     let g_at = |th: f64| s.inside(d_at(th));
@@ -363,25 +453,119 @@ impl Stories {
             .sum()
     }
 
-    /// Energy dissipated by yielding so far (plastic work less the hardening energy still
-    /// stored), all stories, J.
+    /// Energy dissipated by yielding since the start (plastic work less the hardening energy
+    /// still stored), all stories, J.
     pub fn hysteretic_energy(&self) -> f64 {
         if self.stories.is_empty() {
             return 0.0;
         }
-        self.stories
-            .iter()
-            .map(|s| s.spring.hysteretic_energy())
+        (0..self.stories.len())
+            .map(|k| self.story_hysteretic(k))
             .sum()
     }
 
     /// Hysteretic energy of building `b`, J; `None` for a linear building.
     pub fn building_hysteretic_energy(&self, b: usize) -> Option<f64> {
-        self.yielding(b).then(|| {
-            self.of_building(b)
-                .iter()
-                .map(|s| s.spring.hysteretic_energy())
-                .sum()
-        })
+        let f = self.first.get(b).copied().flatten()?;
+        let n = self.of_building(b).len();
+        Some((f..f + n).map(|k| self.story_hysteretic(k)).sum())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use structure::model::StoryLaw;
+    use structure::testing::free_scene;
+    use structure::Building;
+
+    /// One story, k₀ = 1 N/m, yield shear `fy` N (u_y = fy m), b = 0.1, on a unit mass.
+    fn one_story(fy: f64) -> Stories {
+        let mut b = Building::new("s", vec![1.0], vec![1.0], 0.0);
+        b.story_law = StoryLaw::Bilinear {
+            yield_shear: vec![fy],
+            hardening_ratio: 0.1,
+        };
+        Stories::new(&free_scene(vec![b], vec![], 1.0), &[0])
+    }
+
+    /// The dense output of one step of u'' = −u from (sin t0, cos t0) over [t0, t0 + h]
+    /// (its interpolant is within ~1e-4 of sin t for h ≤ 1, less accurate for longer steps).
+    fn harmonic_step(t0: f64, h: f64) -> Dopri5 {
+        let mut dp = Dopri5::new(2, 2, 1e-12, vec![1e-15; 2]);
+        let mut f = |_t: f64, y: &[f64], o: &mut [f64]| {
+            o[0] = y[1];
+            o[1] = -y[0];
+        };
+        let y = [t0.sin(), t0.cos()];
+        f(t0, &y, &mut dp.k[0]);
+        dp.try_step(&mut f, t0, &y, h);
+        dp.prepare_dense(t0, &y, h);
+        dp
+    }
+
+    #[test]
+    fn yield_and_unloading_kinks_are_located_on_the_dense_output() {
+        let mut st = one_story(0.5);
+        let mut calls = 0;
+        // Drift sin t leaves the elastic range [−0.5, 0.5] at t = asin(0.5) = π/6: on the
+        // interpolant to the root tolerance, on sin t to the interpolant's accuracy.
+        let h = 0.8;
+        let dp = harmonic_step(0.0, h);
+        let k = st.locate_kink(&dp, 0, 1, 1.0, &mut calls).unwrap();
+        assert_eq!((k.story, k.kind), (0, KinkKind::Yield));
+        assert!((dp.dense(0, k.theta) - 0.5).abs() < 1e-12);
+        assert!((k.theta * h - std::f64::consts::FRAC_PI_6).abs() < 1e-3);
+        // Not before an earlier event.
+        assert!(st.locate_kink(&dp, 0, 1, 0.5, &mut calls).is_none());
+        // Commit there: the story flows up.
+        let (u, v) = ([dp.dense(0, k.theta)], [dp.dense(1, k.theta)]);
+        st.commit(&u, &v, Some(&k));
+        assert_eq!(st.stories[0].flow, Flow::Up);
+        // Committed further up the flow at t = 1.2; the next step flows until the drift
+        // rate cos t vanishes at π/2: unloading.
+        st.commit(&[1.2f64.sin()], &[1.2f64.cos()], None);
+        assert_eq!(st.stories[0].flow, Flow::Up);
+        let dp = harmonic_step(1.2, h);
+        let before = st.stories[0].spring.state();
+        let k = st.locate_kink(&dp, 0, 1, 1.0, &mut calls).unwrap();
+        assert_eq!(k.kind, KinkKind::Unload);
+        assert!(dp.dense(1, k.theta).abs() < 1e-12);
+        assert!((1.2 + k.theta * h - std::f64::consts::FRAC_PI_2).abs() < 1e-3);
+        // The search is pure; the commit at the kink makes the story elastic again, its
+        // range ending at the peak drift, 2 F_y/k₀ wide.
+        assert_eq!(st.stories[0].spring.state(), before);
+        let peak = dp.dense(0, k.theta);
+        st.commit(&[peak], &[dp.dense(1, k.theta)], Some(&k));
+        assert_eq!(st.stories[0].flow, Flow::Elastic);
+        let (lo, hi) = st.stories[0].spring.elastic_range();
+        assert!(
+            (hi - peak).abs() < 1e-12 && (hi - lo - 1.0).abs() < 1e-12,
+            "{lo} {hi}"
+        );
+        assert!(st.hysteretic_energy() > 0.0);
+        // Unloading from there stays elastic for the next step: no kink.
+        let dp = harmonic_step(std::f64::consts::FRAC_PI_2, 0.5);
+        assert!(st.locate_kink(&dp, 0, 1, 1.0, &mut calls).is_none());
+    }
+
+    #[test]
+    fn an_excursion_out_of_the_range_and_back_between_samples_is_caught() {
+        // u_y = 0.995: the drift sin t over a step of 1.2 whose samples straddle π/2 at
+        // ±0.15 (sin = 0.9888) is inside the range at every sample but peaks at 1: the
+        // interior extremum is checked and the crossing of 0.995 before it located.
+        let st = one_story(0.995);
+        let mut calls = 0;
+        let h = 1.2;
+        let t0 = std::f64::consts::FRAC_PI_2 - 0.15 - 0.3;
+        let dp = harmonic_step(t0, h);
+        for j in 0..=4 {
+            assert!(dp.dense(0, j as f64 / 4.0) < 0.995, "sample {j} inside");
+        }
+        let k = st.locate_kink(&dp, 0, 1, 1.0, &mut calls).unwrap();
+        assert_eq!(k.kind, KinkKind::Yield);
+        assert!((dp.dense(0, k.theta) - 0.995).abs() < 1e-12);
+        assert!(dp.dense(1, k.theta) > 0.0, "the crossing on the way up");
+        assert!((t0 + k.theta * h - 0.995f64.asin()).abs() < 1e-2);
     }
 }
