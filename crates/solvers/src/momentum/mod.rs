@@ -48,7 +48,7 @@
 //! accumulation point, [`SolverError::Stalled`].
 //!
 //! **Refused scenes**: before anything is allocated, a scene whose shortest kept period
-//! needs more than [`stepper::MAX_SUB`] check windows per record step, or whose duration
+//! needs more than [`problem::MAX_SUB`] check windows per record step, or whose duration
 //! needs more than `analysis.max_steps` steps, is refused ([`SolverError::Refused`]).
 //!
 //! **Energy** ([`energy`]): input, damping, impact losses, final, balance error.
@@ -65,13 +65,17 @@
 
 pub mod energy;
 pub mod events;
+pub mod impact;
 pub mod impulse;
 pub mod modal;
 pub mod peaks;
 pub mod persistent;
+pub mod problem;
 pub mod stepper;
 
-pub use stepper::{Diagnostics, ImpactDiagnostics, Problem, State, Step, Stepper};
+pub use impact::ImpactDiagnostics;
+pub use problem::Problem;
+pub use stepper::{Diagnostics, State, Step, Stepper};
 
 use structure::scene::ImpulseVariant;
 use structure::Scene;
