@@ -68,6 +68,7 @@ pub mod events;
 pub mod impact;
 pub mod impulse;
 pub mod modal;
+mod observe;
 pub mod peaks;
 pub mod persistent;
 pub mod problem;

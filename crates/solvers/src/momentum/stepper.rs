@@ -113,6 +113,18 @@ pub struct Stepper<'a> {
     pub overlaps: OverlapTracker,
     /// Per audited pair: coefficients of u_left − u_right on all modes (φ_left − φ_right).
     pub(super) overlap_rows: Vec<Vec<f64>>,
+    /// Running lower bounds of the peaks from deferred candidates (filters only), per
+    /// building (floor / story), and of the overlap maxima per pair.
+    pub(super) disp_lower: Vec<Vec<f64>>,
+    pub(super) shear_lower: Vec<Vec<f64>>,
+    pub(super) overlap_lower: Vec<f64>,
+    /// Candidates for the continuous peaks, refined at the end ([`peaks::Deferred`]).
+    pub(super) deferred: peaks::Deferred,
+    /// Scratch of the observation: flagged (floor, story?) of one building, and the arcs of
+    /// the interval for the building `arcs_for` (`usize::MAX`: all modes).
+    pub(super) flags: Vec<(usize, bool)>,
+    pub(super) obs_arcs: Vec<Arc>,
+    pub(super) arcs_for: Option<usize>,
 }
 
 impl<'a> Stepper<'a> {
@@ -205,6 +217,21 @@ impl<'a> Stepper<'a> {
             held_force: vec![0.0; p.contacts.len()],
             overlap_rows: Vec::new(),
             overlaps: OverlapTracker::new(scene),
+            disp_lower: scene
+                .buildings
+                .iter()
+                .map(|b| vec![0.0; b.n_floors()])
+                .collect(),
+            shear_lower: scene
+                .buildings
+                .iter()
+                .map(|b| vec![0.0; b.n_floors()])
+                .collect(),
+            overlap_lower: Vec::new(),
+            deferred: peaks::Deferred::new(nm),
+            flags: Vec::new(),
+            obs_arcs: Vec::new(),
+            arcs_for: None,
             coef: vec![
                 0.0;
                 p.modal
@@ -248,6 +275,7 @@ impl<'a> Stepper<'a> {
                 row
             })
             .collect();
+        st.overlap_lower = vec![f64::NEG_INFINITY; st.overlaps.pairs.len()];
         st.energy.initial = p.modal.energy(&st.s.x, &st.s.v);
         for (c, ct) in p.contacts.iter().enumerate() {
             let d = ct.delta(&st.s.x);
@@ -260,146 +288,6 @@ impl<'a> Stepper<'a> {
         }
         st.observe();
         Ok(st)
-    }
-
-    /// Floor displacements of every building at the current instant: peaks (branch-free,
-    /// vectorisable), the continuous peaks of the interval since the previous sample
-    /// ([`peaks`]) and, when a history is requested, the shared [`ResponseTracker`].
-    pub(super) fn observe(&mut self) {
-        let (x, v) = (&self.s.x, &self.s.v);
-        let len = self.interval.tau_done;
-        for (b, bm) in self.p.modal.buildings.iter().enumerate() {
-            let u = &mut self.u[b];
-            bm.to_floors2(x, v, u, &mut self.ud[b]);
-            let (dm, sm, k) = (
-                &mut self.disp_max[b],
-                &mut self.shear_max[b],
-                &self.stiffness[b],
-            );
-            let nf = u.len();
-            let (dm, sm, k, u) = (&mut dm[..nf], &mut sm[..nf], &k[..nf], &u[..nf]);
-            for i in 0..nf {
-                let d = u[i].abs();
-                dm[i] = if d > dm[i] { d } else { dm[i] };
-            }
-            let v0 = (k[0] * u[0]).abs();
-            sm[0] = if v0 > sm[0] { v0 } else { sm[0] };
-            for i in 1..nf {
-                let vs = (k[i] * (u[i] - u[i - 1])).abs();
-                sm[i] = if vs > sm[i] { vs } else { sm[i] };
-            }
-            if len > 0.0 {
-                let (up, udp, ud) = (&self.u_prev[b], &self.ud_prev[b], &self.ud[b]);
-                let (nmb, first) = (bm.range.len(), bm.range.start);
-                let modal = &self.p.modal;
-                // Arcs of this building's modes, built at the first candidate only.
-                let mut arcs: Option<Vec<Arc>> = None;
-                let coef = &mut self.coef;
-                for i in 0..nf {
-                    for story in [false, true] {
-                        let (below, below_p, vb, vbp) = if story && i > 0 {
-                            (u[i - 1], up[i - 1], ud[i - 1], udp[i - 1])
-                        } else {
-                            (0.0, 0.0, 0.0, 0.0)
-                        };
-                        let sc = if story { k[i] } else { 1.0 };
-                        let (y0, yd0) = (sc * (up[i] - below_p), sc * (udp[i] - vbp));
-                        let (y1, yd1) = (sc * (u[i] - below), sc * (ud[i] - vb));
-                        let Some((th, h)) = peaks::hermite_extremum(y0, yd0, y1, yd1, len) else {
-                            continue;
-                        };
-                        let peak = if story { sm[i] } else { dm[i] };
-                        // Cheap filter first: the Hermite error is a small fraction of the
-                        // content at the interval's frequencies ((ω len)⁴/384 ≤ 3e-3 for
-                        // ω len ≤ 1), so an estimate below 90 % of the peak cannot raise it.
-                        if h.abs() < 0.9 * peak {
-                            continue;
-                        }
-                        if story {
-                            coef[..nmb]
-                                .copy_from_slice(&self.shear_rows[b][i * nmb..(i + 1) * nmb]);
-                        } else {
-                            for (m, c) in coef[..nmb].iter_mut().enumerate() {
-                                *c = bm.phi[m * nf + i];
-                            }
-                        }
-                        let a = arcs.get_or_insert_with(|| {
-                            peaks::arcs(modal, bm.range.clone(), &self.interval)
-                        });
-                        let c = &coef[..nmb];
-                        if h.abs() + peaks::hermite_error_bound(modal, first, c, a, len) < peak {
-                            continue;
-                        }
-                        let y = peaks::refine(modal, first, c, a, len, th * len).abs();
-                        if story {
-                            sm[i] = sm[i].max(y);
-                        } else {
-                            dm[i] = dm[i].max(y);
-                        }
-                    }
-                }
-            }
-            if self.history.is_some() {
-                self.tracker.observe(b, u);
-                self.tracker.observe_velocity(b, &self.ud[b]);
-            }
-        }
-        if !self.overlaps.is_empty() {
-            self.observe_overlaps(len);
-        }
-        for b in 0..self.u.len() {
-            self.u_prev[b].copy_from_slice(&self.u[b]);
-            self.ud_prev[b].copy_from_slice(&self.ud[b]);
-        }
-        if self.history.is_some() {
-            self.tracker.observe_contact_forces(&self.held_force);
-            self.tracker.sample(self.s.t, self.history.as_deref_mut());
-        }
-    }
-
-    /// The overlap audit at the current sample: u_left − u_right of every audited pair at
-    /// the sample and, when its rate changes sign from + to − over the interval since the
-    /// previous sample (length `len`), at the interior maximum, found as the story-shear
-    /// and displacement peaks are ([`peaks`]: Hermite estimate, cheap filter, rigorous
-    /// Hermite error bound, Newton on the closed form over both buildings' modes).
-    fn observe_overlaps(&mut self, len: f64) {
-        let t = self.s.t;
-        let (u, ud, up, udp) = (&self.u, &self.ud, &self.u_prev, &self.ud_prev);
-        let mut arcs: Option<Vec<Arc>> = None;
-        for k in 0..self.overlaps.pairs.len() {
-            let op = &self.overlaps.pairs[k];
-            let (l, i, r, j) = (op.left, op.left_dof, op.right, op.right_dof);
-            let y1 = u[l][i] - u[r][j];
-            self.overlaps.offer(k, t, y1);
-            if len <= 0.0 {
-                continue;
-            }
-            let (y0, yd0, yd1) = (
-                up[l][i] - up[r][j],
-                udp[l][i] - udp[r][j],
-                ud[l][i] - ud[r][j],
-            );
-            if yd0 <= 0.0 {
-                continue;
-            }
-            let Some((th, h)) = peaks::hermite_extremum(y0, yd0, y1, yd1, len) else {
-                continue;
-            };
-            let best = self.overlaps.max[k];
-            // Cheap filter, as for the peaks: the Hermite error is a small fraction of the
-            // content at the interval's frequencies.
-            if h + 0.1 * h.abs() < best {
-                continue;
-            }
-            let modal = &self.p.modal;
-            let a = arcs.get_or_insert_with(|| peaks::arcs(modal, 0..modal.len(), &self.interval));
-            let c = &self.overlap_rows[k];
-            if h + peaks::hermite_error_bound(modal, 0, c, a, len) < best {
-                continue;
-            }
-            let (s, y) = peaks::refine_at(modal, 0, c, a, len, th * len);
-            self.overlaps.offer(k, t - len + s, y);
-        }
     }
 
     /// Records the interval about to be integrated from the current state (ground a0 → a1
@@ -814,6 +702,7 @@ impl<'a> Stepper<'a> {
         self.energy.damping += self.dmp_acc.iter().sum::<f64>();
         self.win_acc.fill(0.0);
         self.dmp_acc.fill(0.0);
+        self.resolve_deferred();
         for &(c, start) in &self.s.persistent {
             self.phases.push(PersistentContact {
                 contact: c,
