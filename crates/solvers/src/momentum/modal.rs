@@ -38,33 +38,73 @@ impl BuildingModes {
     #[inline]
     pub fn to_floors(&self, q: &[f64], out: &mut [f64]) {
         let nf = self.n_floors;
+        let q = &q[self.range.clone()];
         let out = &mut out[..nf];
-        out.fill(0.0);
-        for (m, &qm) in q[self.range.clone()].iter().enumerate() {
-            let col = &self.phi[m * nf..(m + 1) * nf];
-            for (o, p) in out.iter_mut().zip(col) {
-                *o += p * qm;
+        let mut i0 = 0;
+        while i0 < nf {
+            let w = nf - i0;
+            if w >= 8 {
+                floor_chunk::<8, 1>(&self.phi, nf, i0, [q], [&mut *out]);
+                i0 += 8;
+            } else if w >= 4 {
+                floor_chunk::<4, 1>(&self.phi, nf, i0, [q], [&mut *out]);
+                i0 += 4;
+            } else {
+                floor_chunk::<1, 1>(&self.phi, nf, i0, [q], [&mut *out]);
+                i0 += 1;
+            }
+        }
+    }
+
+    /// Floor displacements u = Φ q and velocities u̇ = Φ q̇ in one pass over the mode shapes.
+    /// Floors are taken in register-held chunks (8, 4, then 1), each summed over the modes
+    /// in mode order (the same sums, in the same order, as a plain loop).
+    #[inline]
+    pub fn to_floors2(&self, q: &[f64], qd: &[f64], u: &mut [f64], ud: &mut [f64]) {
+        let nf = self.n_floors;
+        let r = self.range.clone();
+        let (q, qd) = (&q[r.clone()], &qd[r]);
+        let (u, ud) = (&mut u[..nf], &mut ud[..nf]);
+        let mut i0 = 0;
+        while i0 < nf {
+            let w = nf - i0;
+            if w >= 8 {
+                floor_chunk::<8, 2>(&self.phi, nf, i0, [q, qd], [&mut *u, &mut *ud]);
+                i0 += 8;
+            } else if w >= 4 {
+                floor_chunk::<4, 2>(&self.phi, nf, i0, [q, qd], [&mut *u, &mut *ud]);
+                i0 += 4;
+            } else {
+                floor_chunk::<1, 2>(&self.phi, nf, i0, [q, qd], [&mut *u, &mut *ud]);
+                i0 += 1;
             }
         }
     }
 }
 
-impl BuildingModes {
-    /// Floor displacements u = Φ q and velocities u̇ = Φ q̇ in one pass over the mode shapes.
-    #[inline]
-    pub fn to_floors2(&self, q: &[f64], qd: &[f64], u: &mut [f64], ud: &mut [f64]) {
-        let nf = self.n_floors;
-        let (u, ud) = (&mut u[..nf], &mut ud[..nf]);
-        u.fill(0.0);
-        ud.fill(0.0);
-        let r = self.range.clone();
-        for (m, (&qm, &qdm)) in q[r.clone()].iter().zip(&qd[r]).enumerate() {
-            let col = &self.phi[m * nf..(m + 1) * nf];
-            for ((o, od), p) in u.iter_mut().zip(ud.iter_mut()).zip(col) {
-                *o += p * qm;
-                *od += p * qdm;
+/// Floors i0 … i0+W of Φ·q for each of the R modal vectors `q` into `out`: the W × R
+/// accumulators stay in registers while the modes are summed in order.
+#[inline(always)]
+fn floor_chunk<const W: usize, const R: usize>(
+    phi: &[f64],
+    nf: usize,
+    i0: usize,
+    q: [&[f64]; R],
+    out: [&mut [f64]; R],
+) {
+    let nm = q[0].len();
+    let mut acc = [[0.0f64; W]; R];
+    for m in 0..nm {
+        let col: &[f64; W] = phi[m * nf + i0..m * nf + i0 + W].try_into().unwrap();
+        for r in 0..R {
+            let qm = q[r][m];
+            for k in 0..W {
+                acc[r][k] += col[k] * qm;
             }
         }
+    }
+    for (o, a) in out.into_iter().zip(acc) {
+        o[i0..i0 + W].copy_from_slice(&a);
     }
 }
 

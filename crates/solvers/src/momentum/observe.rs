@@ -104,15 +104,22 @@ impl Stepper<'_> {
         let sc = if story { self.stiffness[b][i] } else { 1.0 };
         let (y0, yd0) = (sc * (up[i] - below_p), sc * (udp[i] - vbp));
         let (y1, yd1) = (sc * (u[i] - below), sc * (ud[i] - vb));
-        let Some((th, h)) = peaks::hermite_extremum(y0, yd0, y1, yd1, len) else {
-            return;
-        };
         let (exact, lower) = if story {
             (self.shear_max[b][i], self.shear_lower[b][i])
         } else {
             (self.disp_max[b][i], self.disp_lower[b][i])
         };
         let peak = exact.max(lower);
+        // |H| ≤ max(|y0|, |y1|) + 4/27 len (|ẏ0| + |ẏ1|) (the Hermite basis functions of
+        // the values are ≥ 0 and sum to 1, those of the slopes are at most 4/27 in size):
+        // most flagged extrema are far below the peak and need no Hermite estimate.
+        let cubic_bound = y0.abs().max(y1.abs()) + 4.0 / 27.0 * len * (yd0.abs() + yd1.abs());
+        if cubic_bound * (1.0 + 1e-9) < 0.9 * peak {
+            return;
+        }
+        let Some((th, h)) = peaks::hermite_extremum(y0, yd0, y1, yd1, len) else {
+            return;
+        };
         if h.abs() < 0.9 * peak {
             return;
         }
@@ -181,13 +188,20 @@ impl Stepper<'_> {
                 udp[l][i] - udp[r][j],
                 ud[l][i] - ud[r][j],
             );
-            if yd0 <= 0.0 {
+            if yd0 <= 0.0 || yd1 >= 0.0 {
+                continue;
+            }
+            let best = self.overlaps.max[k].max(self.overlap_lower[k]);
+            // H ≤ max(y0, y1) + 4/27 len (|ẏ0| + |ẏ1|) (see `interior_extremum`), and the
+            // filter below drops h < best/1.1 (best > 0) or h < best/0.9 (best ≤ 0).
+            let cubic_bound = y0.max(y1) + 4.0 / 27.0 * len * (yd0.abs() + yd1.abs());
+            let bound = cubic_bound + 1e-9 * cubic_bound.abs();
+            if bound + 0.1 * bound.abs() < best {
                 continue;
             }
             let Some((th, h)) = peaks::hermite_extremum(y0, yd0, y1, yd1, len) else {
                 continue;
             };
-            let best = self.overlaps.max[k].max(self.overlap_lower[k]);
             // Cheap filter, as for the peaks: the Hermite error is a small fraction of the
             // content at the interval's frequencies.
             if h + 0.1 * h.abs() < best {
