@@ -59,7 +59,7 @@ impl BuildingModes {
     /// Floor displacements u = Φ q and velocities u̇ = Φ q̇ in one pass over the mode shapes.
     /// Floors are taken in register-held chunks (8, 4, then 1), each summed over the modes
     /// in mode order (the same sums, in the same order, as a plain loop).
-    #[inline]
+    #[inline(always)]
     pub fn to_floors2(&self, q: &[f64], qd: &[f64], u: &mut [f64], ud: &mut [f64]) {
         let nf = self.n_floors;
         let r = self.range.clone();

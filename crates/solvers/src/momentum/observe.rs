@@ -8,6 +8,19 @@
 //! paper scene) takes the slow path: Hermite estimate, cheap filter, rigorous Hermite
 //! error bound, and, if it may raise the peak, a deferred candidate refined at the end of
 //! the run ([`peaks::Deferred`]).
+//!
+//! **Energy envelope.** A building whose response cannot reach any of its peaks over the
+//! interval is not observed at all. For y = Σ_n c_n q_n over the building's modes,
+//! Cauchy–Schwarz with weights ω_n² gives |y| ≤ f_y √(Σ ω_n² q_n²) ≤ f_y √(2E_b), with
+//! f_y = √(Σ c_n²/ω_n²) (a static flexibility) and E_b = ½Σ(q̇_n² + ω_n² q_n²); between
+//! events d√(2E_b)/dt ≤ ‖Γ_b‖ |a_g| (damping only removes energy), so over an interval of
+//! length len, √(2E_b(s)) ≤ R_b = √(2E_b(0)) + len ‖Γ_b‖ max(|a₀|, |a₁|). If
+//! R_b < min_y peak_y/f_y, no displacement or shear of the building can reach its running
+//! peak (exact or the lower bound of a pending candidate) in the interval: the sample and
+//! the extremum checks are skipped, exactly (the peaks are the same). The overlap audit
+//! is skipped likewise when f_y √(R_l² + R_r²) is below every pair's running maximum, else
+//! every building is observed. Not used with a history, nor with held contacts (their
+//! forces are loads the bound does not include).
 
 use super::peaks::{self, Candidate, Target};
 use super::stepper::Stepper;
@@ -19,9 +32,20 @@ impl Stepper<'_> {
         self.arcs_for = None;
         let mut stored: Option<usize> = None;
         let nb = self.p.modal.buildings.len();
+        let skip_overlaps = self.envelope(len);
         for b in 0..nb {
+            if self.skip[b] {
+                self.prev_valid[b] = false;
+                continue;
+            }
             let bm = &self.p.modal.buildings[b];
             let nf = bm.n_floors;
+            if len > 0.0 && !self.prev_valid[b] {
+                // The previous sample was skipped: the rates and values at the interval
+                // start, from its modal state.
+                let (x0, v0) = (&self.interval.x0, &self.interval.v0);
+                bm.to_floors2(x0, v0, &mut self.u_prev[b], &mut self.ud_prev[b]);
+            }
             let (u, ud) = (&mut self.u[b][..nf], &mut self.ud[b][..nf]);
             bm.to_floors2(&self.s.x, &self.s.v, u, ud);
             let (dm, sm, k) = (
@@ -29,16 +53,21 @@ impl Stepper<'_> {
                 &mut self.shear_max[b][..nf],
                 &self.stiffness[b][..nf],
             );
+            let mut raised = false;
             for i in 0..nf {
                 let d = u[i].abs();
+                raised |= d > dm[i];
                 dm[i] = if d > dm[i] { d } else { dm[i] };
             }
             let v0 = (k[0] * u[0]).abs();
+            raised |= v0 > sm[0];
             sm[0] = if v0 > sm[0] { v0 } else { sm[0] };
             for i in 1..nf {
                 let vs = (k[i] * (u[i] - u[i - 1])).abs();
+                raised |= vs > sm[i];
                 sm[i] = if vs > sm[i] { vs } else { sm[i] };
             }
+            self.env_stale[b] |= raised;
             if len > 0.0 {
                 // Rates at both ends of the interval: a sign change flags an interior
                 // extremum (rare); the flagged quantities go to the slow path.
@@ -66,18 +95,78 @@ impl Stepper<'_> {
                 self.tracker.observe(b, &self.u[b]);
                 self.tracker.observe_velocity(b, &self.ud[b]);
             }
+            // The envelope threshold min_y peak_y/f_y, recomputed when a peak (or a lower
+            // bound) has grown: peaks only grow, so an older threshold is a safe one.
+            if !self.env_stale[b] {
+                continue;
+            }
+            self.env_stale[b] = false;
+            let nf = self.u[b].len();
+            let (inv_d, inv_s) = self.env_inv[b][..2 * nf].split_at(nf);
+            let (dm, dl) = (&self.disp_max[b][..nf], &self.disp_lower[b][..nf]);
+            let (sm, sl) = (&self.shear_max[b][..nf], &self.shear_lower[b][..nf]);
+            let mut thr = f64::INFINITY;
+            for i in 0..nf {
+                let (pd, ps) = (dm[i].max(dl[i]) * inv_d[i], sm[i].max(sl[i]) * inv_s[i]);
+                thr = thr.min(pd).min(ps);
+            }
+            self.env_thr[b] = thr;
         }
-        if !self.overlaps.is_empty() {
+        if !self.overlaps.is_empty() && !skip_overlaps {
             self.observe_overlaps(len, &mut stored);
         }
         for b in 0..nb {
-            self.u_prev[b].copy_from_slice(&self.u[b]);
-            self.ud_prev[b].copy_from_slice(&self.ud[b]);
+            if !self.skip[b] {
+                self.u_prev[b].copy_from_slice(&self.u[b]);
+                self.ud_prev[b].copy_from_slice(&self.ud[b]);
+                self.prev_valid[b] = true;
+            }
         }
         if self.history.is_some() {
             self.tracker.observe_contact_forces(&self.held_force);
             self.tracker.sample(self.s.t, self.history.as_deref_mut());
         }
+    }
+
+    /// Sets `skip` per building from the energy envelope (see module docs) and returns
+    /// whether the overlap audit can be skipped too.
+    fn envelope(&mut self, len: f64) -> bool {
+        self.skip.fill(false);
+        if !(len > 0.0) || self.history.is_some() || self.interval.fc.is_some() {
+            return false;
+        }
+        let (p, iv) = (self.p, &self.interval);
+        let amax = iv.a0.abs().max(iv.a1.abs());
+        let mut any = false;
+        for (b, bm) in p.modal.buildings.iter().enumerate() {
+            let r = bm.range.clone();
+            let (x, v, w2) = (&iv.x0[r.clone()], &iv.v0[r.clone()], &p.omega2[r]);
+            let mut e2 = 0.0;
+            for n in 0..x.len() {
+                e2 += v[n] * v[n] + w2[n] * x[n] * x[n];
+            }
+            // A relative margin of 1e-9 covers the round-off of the bound itself.
+            let rb = (e2.sqrt() + len * self.env_gamma[b] * amax) * (1.0 + 1e-9);
+            self.env_r[b] = rb;
+            self.skip[b] = rb < self.env_thr[b];
+            any |= self.skip[b];
+        }
+        if self.overlaps.is_empty() {
+            return true;
+        }
+        for (k, op) in self.overlaps.pairs.iter().enumerate() {
+            let (rl, rr) = (self.env_r[op.left], self.env_r[op.right]);
+            // √(R_l² + R_r²) < best/f_y, squared (best > 0 needed, the bound is ≥ 0).
+            let lim = self.overlaps.max[k].max(self.overlap_lower[k]) * self.overlap_inv[k];
+            if !(lim > 0.0 && (rl * rl + rr * rr) * (1.0 + 1e-9) < lim * lim) {
+                // This pair may reach its maximum: observe every building.
+                if any {
+                    self.skip.fill(false);
+                }
+                return false;
+            }
+        }
+        true
     }
 
     /// The slow path of one flagged quantity of building `b` (floor displacement `i`, or
@@ -148,6 +237,7 @@ impl Stepper<'_> {
         } else {
             self.disp_lower[b][i] = lower.max(lb);
         }
+        self.env_stale[b] = true;
         let interval = *stored.get_or_insert_with(|| self.deferred.store(&self.interval, self.s.t));
         self.deferred.candidates.push(Candidate {
             target: if story {

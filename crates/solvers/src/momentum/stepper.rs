@@ -125,6 +125,21 @@ pub struct Stepper<'a> {
     pub(super) flags: Vec<(usize, bool)>,
     pub(super) obs_arcs: Vec<Arc>,
     pub(super) arcs_for: Option<usize>,
+    /// Energy envelope of the observation ([`super::observe`]): per building, the inverse
+    /// flexibility norms 1/f_y of its floor displacements then story shears
+    /// (f_y = √(Σ_n c_n²/ω_n²), m/√J resp. N/√J), ‖Γ_b‖ (kg^½), the envelope threshold
+    /// min_y peak_y/f_y (√J; 0 until the first observation) and whether the previous
+    /// sample was observed (else u_prev, u̇_prev are rebuilt from the interval start).
+    pub(super) env_inv: Vec<Vec<f64>>,
+    pub(super) env_gamma: Vec<f64>,
+    pub(super) env_thr: Vec<f64>,
+    /// Per building: a peak or lower bound grew since the threshold was computed.
+    pub(super) env_stale: Vec<bool>,
+    pub(super) prev_valid: Vec<bool>,
+    /// Per overlap pair: 1/f_y of u_left − u_right; per building: scratch envelope radius.
+    pub(super) overlap_inv: Vec<f64>,
+    pub(super) env_r: Vec<f64>,
+    pub(super) skip: Vec<bool>,
 }
 
 impl<'a> Stepper<'a> {
@@ -232,6 +247,25 @@ impl<'a> Stepper<'a> {
             flags: Vec::new(),
             obs_arcs: Vec::new(),
             arcs_for: None,
+            env_inv: Vec::new(),
+            env_gamma: p
+                .modal
+                .buildings
+                .iter()
+                .map(|b| {
+                    b.range
+                        .clone()
+                        .map(|n| p.modal.gamma[n].powi(2))
+                        .sum::<f64>()
+                        .sqrt()
+                })
+                .collect(),
+            env_thr: vec![0.0; p.modal.buildings.len()],
+            env_stale: vec![true; p.modal.buildings.len()],
+            prev_valid: vec![false; p.modal.buildings.len()],
+            overlap_inv: Vec::new(),
+            env_r: vec![0.0; p.modal.buildings.len()],
+            skip: vec![false; p.modal.buildings.len()],
             coef: vec![
                 0.0;
                 p.modal
@@ -276,6 +310,37 @@ impl<'a> Stepper<'a> {
             })
             .collect();
         st.overlap_lower = vec![f64::NEG_INFINITY; st.overlaps.pairs.len()];
+        let w2 = &p.omega2;
+        let inv_f = |c: &[f64], first: usize| {
+            let f2: f64 = c
+                .iter()
+                .enumerate()
+                .map(|(m, c)| c * c / w2[first + m])
+                .sum();
+            // f64::MAX, not ∞, for a quantity without modal content: 0 · MAX = 0.
+            if f2 > 0.0 {
+                1.0 / f2.sqrt()
+            } else {
+                f64::MAX
+            }
+        };
+        st.env_inv = p
+            .modal
+            .buildings
+            .iter()
+            .enumerate()
+            .map(|(b, bm)| {
+                let (nf, nmb, first) = (bm.n_floors, bm.range.len(), bm.range.start);
+                let disp = (0..nf).map(|i| {
+                    let row: Vec<f64> = (0..nmb).map(|m| bm.phi[m * nf + i]).collect();
+                    inv_f(&row, first)
+                });
+                let shear =
+                    (0..nf).map(|i| inv_f(&st.shear_rows[b][i * nmb..(i + 1) * nmb], first));
+                disp.chain(shear).collect()
+            })
+            .collect();
+        st.overlap_inv = st.overlap_rows.iter().map(|r| inv_f(r, 0)).collect();
         st.energy.initial = p.modal.energy(&st.s.x, &st.s.v);
         for (c, ct) in p.contacts.iter().enumerate() {
             let d = ct.delta(&st.s.x);
