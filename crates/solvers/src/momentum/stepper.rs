@@ -474,46 +474,32 @@ impl<'a> Stepper<'a> {
         let h = p.full.h;
         self.begin_interval(a0, a1, h, None);
         {
-            // Structure of arrays, all sliced to `nm` so that the loop has no bounds checks
-            // and no cross-mode dependency (per-mode energy accumulators): it vectorises.
+            // Modes in chunks of 4 (coefficients interleaved per chunk, the tail one mode at
+            // a time): fixed-width arithmetic without bounds checks, which vectorises.
             let c = &p.full;
             let nm = self.s.x.len();
+            let n4 = nm / 4 * 4;
             let (x, v) = (&self.s.x[..nm], &self.s.v[..nm]);
             let (xn, vn) = (&mut self.xn[..nm], &mut self.vn[..nm]);
             let (win, dmp) = (&mut self.win_step[..nm], &mut self.dmp_step[..nm]);
-            let (a00, a01, a10, a11) = (&c.a00[..nm], &c.a01[..nm], &c.a10[..nm], &c.a11[..nm]);
-            let (b00, b01, b10, b11) = (&c.b00[..nm], &c.b01[..nm], &c.b10[..nm], &c.b11[..nm]);
-            let (tzw, iw2, gam) = (&c.two_zw[..nm], &c.inv_w2[..nm], &p.modal.gamma[..nm]);
-            let q = &c.dq;
-            let (q0, q1, q2, q3, q4) = (
-                &q[0][..nm],
-                &q[1][..nm],
-                &q[2][..nm],
-                &q[3][..nm],
-                &q[4][..nm],
-            );
-            let (q5, q6, q7, q8, q9) = (
-                &q[5][..nm],
-                &q[6][..nm],
-                &q[7][..nm],
-                &q[8][..nm],
-                &q[9][..nm],
-            );
-            let inv_h = 1.0 / h;
-            for n in 0..nm {
-                let f0 = -gam[n] * a0;
-                let f1 = -gam[n] * a1;
-                let (x0, v0) = (x[n], v[n]);
-                let x1 = a00[n] * x0 + a01[n] * v0 + b00[n] * f0 + b01[n] * f1;
-                let v1 = a10[n] * x0 + a11[n] * v0 + b10[n] * f0 + b11[n] * f1;
-                let ix = (0.5 * (f0 + f1) * h - (v1 - v0) - tzw[n] * (x1 - x0)) * iw2[n];
-                win[n] = f0 * (x1 - x0) + (f1 - f0) * (x1 - ix * inv_h);
-                dmp[n] = x0 * (q0[n] * x0 + q1[n] * v0 + q2[n] * f0 + q3[n] * f1)
-                    + v0 * (q4[n] * v0 + q5[n] * f0 + q6[n] * f1)
-                    + f0 * (q7[n] * f0 + q8[n] * f1)
-                    + q9[n] * f1 * f1;
-                xn[n] = x1;
-                vn[n] = v1;
+            for (k, blk) in c.blocks.iter().enumerate() {
+                let r = 4 * k..4 * k + 4;
+                let out = super::modal::propagate::<4>(
+                    blk,
+                    x[r.clone()].try_into().unwrap(),
+                    v[r.clone()].try_into().unwrap(),
+                    a0,
+                    a1,
+                    h,
+                );
+                xn[r.clone()].copy_from_slice(&out[0]);
+                vn[r.clone()].copy_from_slice(&out[1]);
+                win[r.clone()].copy_from_slice(&out[2]);
+                dmp[r].copy_from_slice(&out[3]);
+            }
+            for n in n4..nm {
+                let out = super::modal::propagate::<1>(&c.tail[n - n4], [x[n]], [v[n]], a0, a1, h);
+                (xn[n], vn[n], win[n], dmp[n]) = (out[0][0], out[1][0], out[2][0], out[3][0]);
             }
         }
         // Rigorous skip of far contacts: d√(2E)/dt ≤ |f| (modal load norm), so over the step
@@ -522,8 +508,19 @@ impl<'a> Stepper<'a> {
         let e2 = {
             let nm = self.s.x.len();
             let (x, v, w2) = (&self.s.x[..nm], &self.s.v[..nm], &p.omega2[..nm]);
+            // Four interleaved partial sums (acc[n % 4]), as chunks of 4 modes.
             let mut acc = [0.0f64; 4];
-            for n in 0..nm {
+            let n4 = nm / 4 * 4;
+            for ((xc, vc), wc) in x[..n4]
+                .chunks_exact(4)
+                .zip(v[..n4].chunks_exact(4))
+                .zip(w2[..n4].chunks_exact(4))
+            {
+                for k in 0..4 {
+                    acc[k] += vc[k] * vc[k] + wc[k] * xc[k] * xc[k];
+                }
+            }
+            for n in n4..nm {
                 acc[n % 4] += v[n] * v[n] + w2[n] * x[n] * x[n];
             }
             acc.iter().sum::<f64>()
