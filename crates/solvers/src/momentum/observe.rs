@@ -27,6 +27,7 @@ use super::stepper::Stepper;
 
 impl Stepper<'_> {
     /// Observes the current instant (see module docs).
+    #[inline(always)]
     pub(super) fn observe(&mut self) {
         let len = self.interval.tau_done;
         self.arcs_for = None;
@@ -130,6 +131,7 @@ impl Stepper<'_> {
 
     /// Sets `skip` per building from the energy envelope (see module docs) and returns
     /// whether the overlap audit can be skipped too.
+    #[inline(always)]
     fn envelope(&mut self, len: f64) -> bool {
         self.skip.fill(false);
         if !(len > 0.0) || self.history.is_some() || self.interval.fc.is_some() {
@@ -262,6 +264,7 @@ impl Stepper<'_> {
     /// previous sample (length `len`), a candidate interior maximum, found as the
     /// story-shear and displacement peaks are (Hermite estimate, cheap filter, rigorous
     /// Hermite error bound over both buildings' modes, deferred refinement).
+    #[inline(always)]
     fn observe_overlaps(&mut self, len: f64, stored: &mut Option<usize>) {
         let t = self.s.t;
         for k in 0..self.overlaps.pairs.len() {

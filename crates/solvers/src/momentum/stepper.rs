@@ -136,6 +136,8 @@ pub struct Stepper<'a> {
     /// Per building: a peak or lower bound grew since the threshold was computed.
     pub(super) env_stale: Vec<bool>,
     pub(super) prev_valid: Vec<bool>,
+    /// The instruction set of the vectorised fast path (detected once).
+    pub(super) arch: pulp::Arch,
     /// Per overlap pair: 1/f_y of u_left − u_right; per building: scratch envelope radius.
     pub(super) overlap_inv: Vec<f64>,
     pub(super) env_r: Vec<f64>,
@@ -263,6 +265,7 @@ impl<'a> Stepper<'a> {
             env_thr: vec![0.0; p.modal.buildings.len()],
             env_stale: vec![true; p.modal.buildings.len()],
             prev_valid: vec![false; p.modal.buildings.len()],
+            arch: pulp::Arch::new(),
             overlap_inv: Vec::new(),
             env_r: vec![0.0; p.modal.buildings.len()],
             skip: vec![false; p.modal.buildings.len()],
@@ -468,7 +471,29 @@ impl<'a> Stepper<'a> {
 
     /// A full base step with precomputed propagators; `None` if an event may occur (the
     /// caller then takes the closed-form path from the unchanged state).
+    ///
+    /// Runs with the widest vector instructions the machine has (AVX2 where available,
+    /// [`pulp::Arch`]): the same operations in the same order (no fused multiply-add), so
+    /// the results are bit-identical on every machine.
     fn fast_step(&mut self, j: usize, t_end: f64) -> Result<Option<Step>, SolverError> {
+        struct Op<'s, 'a> {
+            st: &'s mut Stepper<'a>,
+            j: usize,
+            t_end: f64,
+        }
+        impl pulp::WithSimd for Op<'_, '_> {
+            type Output = Result<Option<Step>, SolverError>;
+            #[inline(always)]
+            fn with_simd<S: pulp::Simd>(self, _: S) -> Self::Output {
+                self.st.fast_step_body(self.j, self.t_end)
+            }
+        }
+        let arch = self.arch;
+        arch.dispatch(Op { st: self, j, t_end })
+    }
+
+    #[inline(always)]
+    fn fast_step_body(&mut self, j: usize, t_end: f64) -> Result<Option<Step>, SolverError> {
         let p = self.p;
         let (a0, a1) = (p.ag_start[j], p.ag_end[j]);
         let h = p.full.h;
