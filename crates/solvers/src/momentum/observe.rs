@@ -118,8 +118,9 @@ impl Stepper<'_> {
         }
         for b in 0..nb {
             if !self.skip[b] {
-                self.u_prev[b].copy_from_slice(&self.u[b]);
-                self.ud_prev[b].copy_from_slice(&self.ud[b]);
+                // The current sample becomes the previous one (buffers exchanged).
+                std::mem::swap(&mut self.u_prev[b], &mut self.u[b]);
+                std::mem::swap(&mut self.ud_prev[b], &mut self.ud[b]);
                 self.prev_valid[b] = true;
             }
         }

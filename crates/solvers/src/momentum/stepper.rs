@@ -230,7 +230,11 @@ impl<'a> Stepper<'a> {
                 .iter()
                 .map(|b| vec![0.0; b.n_floors])
                 .collect(),
-            interval: peaks::Interval::default(),
+            interval: peaks::Interval {
+                x0: vec![0.0; nm],
+                v0: vec![0.0; nm],
+                ..Default::default()
+            },
             held_force: vec![0.0; p.contacts.len()],
             overlap_rows: Vec::new(),
             overlaps: OverlapTracker::new(scene),
@@ -497,7 +501,6 @@ impl<'a> Stepper<'a> {
         let p = self.p;
         let (a0, a1) = (p.ag_start[j], p.ag_end[j]);
         let h = p.full.h;
-        self.begin_interval(a0, a1, h, None);
         {
             // Modes in chunks of 4 (coefficients interleaved per chunk, the tail one mode at
             // a time): fixed-width arithmetic without bounds checks, which vectorises.
@@ -607,8 +610,14 @@ impl<'a> Stepper<'a> {
                 prev = cur;
             }
         }
+        // Accepted: the new state becomes current and the old one the start of the interval
+        // just integrated (buffers exchanged, nothing copied).
         std::mem::swap(&mut self.s.x, &mut self.xn);
         std::mem::swap(&mut self.s.v, &mut self.vn);
+        std::mem::swap(&mut self.interval.x0, &mut self.xn);
+        std::mem::swap(&mut self.interval.v0, &mut self.vn);
+        let iv = &mut self.interval;
+        (iv.a0, iv.a1, iv.tau, iv.fc) = (a0, a1, h, None);
         // Energy of the accepted step only (a step with a possible event is discarded).
         for (acc, w) in self.win_acc.iter_mut().zip(&self.win_step) {
             *acc += w;
