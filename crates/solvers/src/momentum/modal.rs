@@ -40,7 +40,14 @@ pub struct BuildingModes {
 const BLOCK: usize = 4;
 
 impl BuildingModes {
-    /// Floor displacements u = Φ q (or velocities from q̇) of this building into `out`.
+    /// Floors rounded up to whole blocks of the reconstruction kernel: the length of the
+    /// output buffers of [`BuildingModes::to_floors`] and [`BuildingModes::to_floors2`].
+    pub fn padded_floors(&self) -> usize {
+        self.n_floors.div_ceil(BLOCK) * BLOCK
+    }
+
+    /// Floor displacements u = Φ q (or velocities from q̇) of this building into `out`
+    /// (at least [`BuildingModes::padded_floors`] long).
     #[inline]
     pub fn to_floors(&self, q: &[f64], out: &mut [f64]) {
         let q = &q[self.range.clone()];
@@ -54,13 +61,14 @@ impl BuildingModes {
         self.reconstruct([&q[r.clone()], &qd[r]], [u, ud]);
     }
 
-    /// Φ·q for each of the R modal vectors `q` (this building's modes) into `out`: floors
+    /// Φ·q for each of the R modal vectors `q` (this building's modes) into `out` (at least
+    /// [`BuildingModes::padded_floors`] long; the padding receives zeros): floors
     /// in register-held blocks of [`BLOCK`] ([`BuildingModes::blocks`], zero-padded), each
     /// floor summed over the modes in mode order from 0 (the same sums, in the same order,
     /// as a plain loop), without bounds checks in the inner loop.
     #[inline(always)]
     fn reconstruct<const R: usize>(&self, q: [&[f64]; R], out: [&mut [f64]; R]) {
-        let (nf, nm) = (self.n_floors, q[0].len());
+        let nm = q[0].len();
         let q: [&[f64]; R] = std::array::from_fn(|r| &q[r][..nm]);
         for (c, blk) in self.blocks.chunks_exact(nm).enumerate() {
             let mut acc = [[0.0f64; BLOCK]; R];
@@ -74,9 +82,8 @@ impl BuildingModes {
                 }
             }
             let i0 = c * BLOCK;
-            let w = (nf - i0).min(BLOCK);
             for r in 0..R {
-                out[r][i0..i0 + w].copy_from_slice(&acc[r][..w]);
+                out[r][i0..i0 + BLOCK].copy_from_slice(&acc[r]);
             }
         }
     }

@@ -47,8 +47,8 @@ impl Stepper<'_> {
                 let (x0, v0) = (&self.interval.x0, &self.interval.v0);
                 bm.to_floors2(x0, v0, &mut self.u_prev[b], &mut self.ud_prev[b]);
             }
-            let (u, ud) = (&mut self.u[b][..nf], &mut self.ud[b][..nf]);
-            bm.to_floors2(&self.s.x, &self.s.v, u, ud);
+            bm.to_floors2(&self.s.x, &self.s.v, &mut self.u[b], &mut self.ud[b]);
+            let (u, ud) = (&self.u[b][..nf], &self.ud[b][..nf]);
             let (dm, sm, k) = (
                 &mut self.disp_max[b][..nf],
                 &mut self.shear_max[b][..nf],
@@ -93,8 +93,8 @@ impl Stepper<'_> {
                 }
             }
             if self.history.is_some() {
-                self.tracker.observe(b, &self.u[b]);
-                self.tracker.observe_velocity(b, &self.ud[b]);
+                self.tracker.observe(b, &self.u[b][..nf]);
+                self.tracker.observe_velocity(b, &self.ud[b][..nf]);
             }
             // The envelope threshold min_y peak_y/f_y, recomputed when a peak (or a lower
             // bound) has grown: peaks only grow, so an older threshold is a safe one.
@@ -102,7 +102,6 @@ impl Stepper<'_> {
                 continue;
             }
             self.env_stale[b] = false;
-            let nf = self.u[b].len();
             let (inv_d, inv_s) = self.env_inv[b][..2 * nf].split_at(nf);
             let (dm, dl) = (&self.disp_max[b][..nf], &self.disp_lower[b][..nf]);
             let (sm, sl) = (&self.shear_max[b][..nf], &self.shear_lower[b][..nf]);

@@ -209,26 +209,26 @@ impl<'a> Stepper<'a> {
             u: p.modal
                 .buildings
                 .iter()
-                .map(|b| vec![0.0; b.n_floors])
+                .map(|b| vec![0.0; b.padded_floors()])
                 .collect(),
             arcs: Vec::with_capacity(nm),
             ud: p
                 .modal
                 .buildings
                 .iter()
-                .map(|b| vec![0.0; b.n_floors])
+                .map(|b| vec![0.0; b.padded_floors()])
                 .collect(),
             u_prev: p
                 .modal
                 .buildings
                 .iter()
-                .map(|b| vec![0.0; b.n_floors])
+                .map(|b| vec![0.0; b.padded_floors()])
                 .collect(),
             ud_prev: p
                 .modal
                 .buildings
                 .iter()
-                .map(|b| vec![0.0; b.n_floors])
+                .map(|b| vec![0.0; b.padded_floors()])
                 .collect(),
             interval: peaks::Interval {
                 x0: vec![0.0; nm],
