@@ -32,12 +32,13 @@ pub struct BuildingModes {
     /// Modes available (= floors) and kept.
     pub available: usize,
     /// Mode shapes by blocks of [`BLOCK`] floors (zero-padded): `blocks[c * n_modes + m]`
-    /// holds φ_m[c·BLOCK … c·BLOCK + BLOCK − 1] (the layout of the reconstruction kernel).
+    /// holds floors `c·BLOCK … c·BLOCK + BLOCK − 1` of mode m (the layout of the
+    /// reconstruction kernel).
     pub blocks: Vec<[f64; BLOCK]>,
 }
 
 /// Floors per block of the reconstruction kernel.
-const BLOCK: usize = 4;
+pub const BLOCK: usize = 4;
 
 impl BuildingModes {
     /// Floors rounded up to whole blocks of the reconstruction kernel: the length of the
