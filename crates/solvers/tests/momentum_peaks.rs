@@ -82,3 +82,39 @@ fn gap_element_peaks_do_not_move_with_a_finer_record_beyond_its_tolerance() {
         assert!(d < 1e-6, "gap {gap}: peaks differ by {d:.2e}");
     }
 }
+
+/// The observation skips a building whose energy envelope cannot reach any of its peaks
+/// over an interval, except when a history is recorded (every sample is then observed).
+/// The skip is exact: peaks, overlap maxima and their instants are bit-identical with and
+/// without a history (paper scene at two gaps, and the aligned scene with its audit).
+#[test]
+fn energy_envelope_skip_leaves_every_peak_unchanged() {
+    let scenes = [
+        paper(&["contacts.0.gap=0.10"]),
+        paper(&["contacts.0.gap=0.05"]),
+        structure::testing::paper_scene_aligned(&["contacts.0.gap=0.05"]),
+    ];
+    for s in scenes {
+        let plain = solve(&s, None).unwrap();
+        let mut h = solvers::History::default();
+        let full = solve(&s, Some(&mut h)).unwrap();
+        assert!(!h.time.is_empty());
+        for (a, b) in plain.buildings.iter().zip(&full.buildings) {
+            assert_eq!(a.story_shear_max, b.story_shear_max, "{}", s.name);
+            assert_eq!(
+                a.floor_displacement_max, b.floor_displacement_max,
+                "{}",
+                s.name
+            );
+        }
+        assert_eq!(plain.overlaps.len(), full.overlaps.len());
+        for (a, b) in plain.overlaps.iter().zip(&full.overlaps) {
+            assert_eq!(
+                (a.max_overlap, a.time),
+                (b.max_overlap, b.time),
+                "{}",
+                s.name
+            );
+        }
+    }
+}

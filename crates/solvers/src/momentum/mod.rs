@@ -10,12 +10,26 @@
 //! ```
 //!
 //! **Between events** a_g is piecewise linear on the record grid and every mode is
-//! propagated exactly (Nigam–Jennings, [`modal`]). The grid is the record step `dt`; when the shortest kept period T_min < 8 dt the
-//! event check looks at `sub = ⌈8 dt / T_min⌉` windows per step (δ, δ̇ at the interior
-//! points from precomputed partial propagators) so that each window holds at most one
-//! extremum of a gap function. Past the record end
-//! a_g = 0 and the same grid continues to the analysis duration. Without a record the grid
-//! is T_min/8. Peak responses are sampled at record points and event instants.
+//! propagated exactly (Nigam–Jennings, [`modal`]): over a full step of length h,
+//! (q, q̇)ₖ₊₁ = A(h)(q, q̇)ₖ + B(h)(f(tₖ), f(tₖ₊₁)) with A, B constant per mode (computed
+//! once, [`modal::StepCoeffs`]: no trigonometric function per step). The grid is the
+//! record step `dt`; when the shortest kept period T_min < 8 dt the event check looks at
+//! `sub = ⌈8 dt / T_min⌉` windows per step (δ, δ̇ at the interior points from precomputed
+//! partial propagators) so that each window holds at most one extremum of a gap function.
+//! Past the record end a_g = 0 and the same grid continues to the analysis duration.
+//! Without a record the grid is T_min/8.
+//!
+//! **Peaks** ([`peaks`]) are continuous maxima, not samples: floor displacements
+//! u = Φq (eq. 26) and story shears k_j (u_j − u_{j−1}) are observed at every record point
+//! and event instant, and an extremum between two samples (a sign change of ẏ) is refined
+//! on the closed form (deferred to the end of the run, only where it can be the peak).
+//! A building whose energy envelope cannot reach any of its peaks over an interval is not
+//! observed at all ([`observe`]; exact).
+//!
+//! **Structure**: [`problem`] (the data built from a scene), [`stepper`] (the state and
+//! [`Stepper::advance`], one segment with a typed [`Step`]), [`observe`] (peaks, overlaps,
+//! history), [`impact`] (impact resolution), [`persistent`] (held contacts); the driver
+//! loop is [`solve_with_diagnostics`] below.
 //!
 //! **Events** ([`events`]): contact c closes when δ_c = u_left − u_right − gap crosses 0
 //! upwards (δ̇ > 0). The instant is located with Brent's method (`roots`) on the closed
@@ -48,7 +62,7 @@
 //! accumulation point, [`SolverError::Stalled`].
 //!
 //! **Refused scenes**: before anything is allocated, a scene whose shortest kept period
-//! needs more than [`stepper::MAX_SUB`] check windows per record step, or whose duration
+//! needs more than [`problem::MAX_SUB`] check windows per record step, or whose duration
 //! needs more than `analysis.max_steps` steps, is refused ([`SolverError::Refused`]).
 //!
 //! **Energy** ([`energy`]): input, damping, impact losses, final, balance error.
@@ -65,13 +79,18 @@
 
 pub mod energy;
 pub mod events;
+pub mod impact;
 pub mod impulse;
 pub mod modal;
+pub mod observe;
 pub mod peaks;
 pub mod persistent;
+pub mod problem;
 pub mod stepper;
 
-pub use stepper::{Diagnostics, ImpactDiagnostics, Problem, State, Step, Stepper};
+pub use impact::ImpactDiagnostics;
+pub use problem::Problem;
+pub use stepper::{Diagnostics, State, Step, Stepper};
 
 use structure::scene::ImpulseVariant;
 use structure::Scene;

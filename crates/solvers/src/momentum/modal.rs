@@ -31,38 +31,60 @@ pub struct BuildingModes {
     pub masses: Vec<f64>,
     /// Modes available (= floors) and kept.
     pub available: usize,
+    /// Mode shapes by blocks of [`BLOCK`] floors (zero-padded): `blocks[c * n_modes + m]`
+    /// holds floors `c·BLOCK … c·BLOCK + BLOCK − 1` of mode m (the layout of the
+    /// reconstruction kernel).
+    pub blocks: Vec<[f64; BLOCK]>,
 }
 
+/// Floors per block of the reconstruction kernel.
+pub const BLOCK: usize = 4;
+
 impl BuildingModes {
-    /// Floor displacements u = Φ q (or velocities from q̇) of this building into `out`.
+    /// Floors rounded up to whole blocks of the reconstruction kernel: the length of the
+    /// output buffers of [`BuildingModes::to_floors`] and [`BuildingModes::to_floors2`].
+    pub fn padded_floors(&self) -> usize {
+        self.n_floors.div_ceil(BLOCK) * BLOCK
+    }
+
+    /// Floor displacements u = Φ q (or velocities from q̇) of this building into `out`
+    /// (at least [`BuildingModes::padded_floors`] long).
     #[inline]
     pub fn to_floors(&self, q: &[f64], out: &mut [f64]) {
-        let nf = self.n_floors;
-        let out = &mut out[..nf];
-        out.fill(0.0);
-        for (m, &qm) in q[self.range.clone()].iter().enumerate() {
-            let col = &self.phi[m * nf..(m + 1) * nf];
-            for (o, p) in out.iter_mut().zip(col) {
-                *o += p * qm;
-            }
-        }
+        let q = &q[self.range.clone()];
+        self.reconstruct([q], [out]);
     }
-}
 
-impl BuildingModes {
     /// Floor displacements u = Φ q and velocities u̇ = Φ q̇ in one pass over the mode shapes.
-    #[inline]
+    #[inline(always)]
     pub fn to_floors2(&self, q: &[f64], qd: &[f64], u: &mut [f64], ud: &mut [f64]) {
-        let nf = self.n_floors;
-        let (u, ud) = (&mut u[..nf], &mut ud[..nf]);
-        u.fill(0.0);
-        ud.fill(0.0);
         let r = self.range.clone();
-        for (m, (&qm, &qdm)) in q[r.clone()].iter().zip(&qd[r]).enumerate() {
-            let col = &self.phi[m * nf..(m + 1) * nf];
-            for ((o, od), p) in u.iter_mut().zip(ud.iter_mut()).zip(col) {
-                *o += p * qm;
-                *od += p * qdm;
+        self.reconstruct([&q[r.clone()], &qd[r]], [u, ud]);
+    }
+
+    /// Φ·q for each of the R modal vectors `q` (this building's modes) into `out` (at least
+    /// [`BuildingModes::padded_floors`] long; the padding receives zeros): floors
+    /// in register-held blocks of [`BLOCK`] ([`BuildingModes::blocks`], zero-padded), each
+    /// floor summed over the modes in mode order from 0 (the same sums, in the same order,
+    /// as a plain loop), without bounds checks in the inner loop.
+    #[inline(always)]
+    fn reconstruct<const R: usize>(&self, q: [&[f64]; R], out: [&mut [f64]; R]) {
+        let nm = q[0].len();
+        let q: [&[f64]; R] = std::array::from_fn(|r| &q[r][..nm]);
+        for (c, blk) in self.blocks.chunks_exact(nm).enumerate() {
+            let mut acc = [[0.0f64; BLOCK]; R];
+            for m in 0..nm {
+                let col = &blk[m];
+                for r in 0..R {
+                    let qm = q[r][m];
+                    for k in 0..BLOCK {
+                        acc[r][k] += col[k] * qm;
+                    }
+                }
+            }
+            let i0 = c * BLOCK;
+            for r in 0..R {
+                out[r][i0..i0 + BLOCK].copy_from_slice(&acc[r]);
             }
         }
     }
@@ -102,12 +124,26 @@ impl Modal {
                 .flat_map(|k| (0..nf).map(move |i| (k, i)))
                 .map(|(k, i)| md.phi[(i, k)])
                 .collect();
+            let phi: Vec<f64> = phi;
+            let blocks = (0..nf.div_ceil(BLOCK))
+                .flat_map(|c| (0..n).map(move |k| (c, k)))
+                .map(|(c, k)| {
+                    let mut col = [0.0; BLOCK];
+                    for (j, v) in col.iter_mut().enumerate() {
+                        if c * BLOCK + j < nf {
+                            *v = phi[k * nf + c * BLOCK + j];
+                        }
+                    }
+                    col
+                })
+                .collect();
             m.buildings.push(BuildingModes {
                 range: start..start + n,
                 n_floors: nf,
                 phi,
                 masses: b.masses.clone(),
                 available: all.n_modes(),
+                blocks,
             });
         }
         Ok(m)
@@ -178,6 +214,71 @@ pub struct StepCoeffs {
     /// Damping work 2ζω ∫₀ʰ q̇² ds as a quadratic form in z = (q₀, q̇₀, f₀, f₁): the 10 upper
     /// coefficients (off-diagonal ones doubled), order 00 01 02 03 11 12 13 22 23 33.
     pub dq: [Vec<f64>; 10],
+    /// The same coefficients interleaved by chunks of 4 modes (the fast-step kernel
+    /// [`propagate`]), and the modes past the last full chunk one by one.
+    pub blocks: Vec<StepBlock<4>>,
+    pub tail: Vec<StepBlock<1>>,
+}
+
+/// Step coefficients of W consecutive modes, field by field (see [`StepCoeffs`]): a00 a01
+/// a10 a11 b00 b01 b10 b11, 2ζω, 1/ω², Γ, then the 10 damping-form coefficients.
+#[derive(Debug, Clone)]
+pub struct StepBlock<const W: usize> {
+    pub c: [[f64; W]; 21],
+}
+
+impl<const W: usize> StepBlock<W> {
+    fn gather(c: &StepCoeffs, gamma: &[f64], first: usize) -> Self {
+        let fields: [&[f64]; 11] = [
+            &c.a00, &c.a01, &c.a10, &c.a11, &c.b00, &c.b01, &c.b10, &c.b11, &c.two_zw, &c.inv_w2,
+            gamma,
+        ];
+        let mut out = StepBlock { c: [[0.0; W]; 21] };
+        for k in 0..W {
+            for (f, src) in fields.iter().enumerate() {
+                out.c[f][k] = src[first + k];
+            }
+            for (q, src) in c.dq.iter().enumerate() {
+                out.c[11 + q][k] = src[first + k];
+            }
+        }
+        out
+    }
+}
+
+/// One full step of W modes from (x, v) under the ground acceleration a0 → a1 over h:
+/// [x₁, v₁, input work, damping work] (the fast path of the stepper; the same arithmetic,
+/// in the same order, per mode as the scalar formulas: Nigam–Jennings propagator,
+/// [`load_work`], the damping quadratic form).
+#[inline(always)]
+pub fn propagate<const W: usize>(
+    blk: &StepBlock<W>,
+    x: [f64; W],
+    v: [f64; W],
+    a0: f64,
+    a1: f64,
+    h: f64,
+) -> [[f64; W]; 4] {
+    let c = &blk.c;
+    let inv_h = 1.0 / h;
+    let mut out = [[0.0; W]; 4];
+    for n in 0..W {
+        let f0 = -c[10][n] * a0;
+        let f1 = -c[10][n] * a1;
+        let (x0, v0) = (x[n], v[n]);
+        let x1 = c[0][n] * x0 + c[1][n] * v0 + c[4][n] * f0 + c[5][n] * f1;
+        let v1 = c[2][n] * x0 + c[3][n] * v0 + c[6][n] * f0 + c[7][n] * f1;
+        let ix = (0.5 * (f0 + f1) * h - (v1 - v0) - c[8][n] * (x1 - x0)) * c[9][n];
+        let q = |i: usize| c[11 + i][n];
+        out[0][n] = x1;
+        out[1][n] = v1;
+        out[2][n] = f0 * (x1 - x0) + (f1 - f0) * (x1 - ix * inv_h);
+        out[3][n] = x0 * (q(0) * x0 + q(1) * v0 + q(2) * f0 + q(3) * f1)
+            + v0 * (q(4) * v0 + q(5) * f0 + q(6) * f1)
+            + f0 * (q(7) * f0 + q(8) * f1)
+            + q(9) * f1 * f1;
+    }
+    out
 }
 
 impl StepCoeffs {
@@ -196,6 +297,8 @@ impl StepCoeffs {
             two_zw: vec![0.0; nm],
             inv_w2: vec![0.0; nm],
             dq: Default::default(),
+            blocks: Vec::new(),
+            tail: Vec::new(),
         };
         for q in c.dq.iter_mut() {
             *q = vec![0.0; nm];
@@ -236,6 +339,13 @@ impl StepCoeffs {
                 }
             }
         }
+        let n4 = nm / 4 * 4;
+        c.blocks = (0..n4 / 4)
+            .map(|k| StepBlock::gather(&c, &modal.gamma, 4 * k))
+            .collect();
+        c.tail = (n4..nm)
+            .map(|n| StepBlock::gather(&c, &modal.gamma, n))
+            .collect();
         c
     }
 }

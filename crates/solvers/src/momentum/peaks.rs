@@ -40,20 +40,153 @@ pub use crate::response::hermite_extremum;
 
 /// The closed-form arcs of the modes `range` over the interval `iv`.
 pub fn arcs(modal: &Modal, range: std::ops::Range<usize>, iv: &Interval) -> Vec<Arc> {
+    arcs_of(
+        modal,
+        range,
+        &iv.x0,
+        &iv.v0,
+        iv.fc.as_deref(),
+        iv.a0,
+        iv.a1,
+        iv.tau,
+    )
+}
+
+/// The closed-form arcs of the modes `range` from the state (`x0`, `v0`) under the ground
+/// acceleration a0 → a1 over `tau` plus the constant held-contact loads `fc`.
+#[allow(clippy::too_many_arguments)]
+pub fn arcs_of(
+    modal: &Modal,
+    range: std::ops::Range<usize>,
+    x0: &[f64],
+    v0: &[f64],
+    fc: Option<&[f64]>,
+    a0: f64,
+    a1: f64,
+    tau: f64,
+) -> Vec<Arc> {
     range
         .map(|n| {
-            let extra = iv.fc.as_ref().map_or(0.0, |f| f[n]);
+            let extra = fc.map_or(0.0, |f| f[n]);
             Arc::new(
                 modal.omega[n],
                 modal.zeta[n],
-                iv.x0[n],
-                iv.v0[n],
-                -modal.gamma[n] * iv.a0 + extra,
-                -modal.gamma[n] * iv.a1 + extra,
-                iv.tau,
+                x0[n],
+                v0[n],
+                -modal.gamma[n] * a0 + extra,
+                -modal.gamma[n] * a1 + extra,
+                tau,
             )
         })
         .collect()
+}
+
+/// The response quantity a deferred candidate may raise.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Target {
+    /// |u_i| of building `building`, floor index `floor`.
+    Displacement { building: usize, floor: usize },
+    /// |k_j (u_j − u_{j−1})| of building `building`, story index `story`.
+    Shear { building: usize, story: usize },
+    /// u_left − u_right of overlap pair `pair` (signed maximum).
+    Overlap { pair: usize },
+}
+
+/// An interior extremum whose exact value may exceed the running peak, kept for the end
+/// of the run: the Hermite estimate h at s0 and the rigorous upper bound |h| + |y − H|max.
+#[derive(Debug, Clone, Copy)]
+pub struct Candidate {
+    pub target: Target,
+    /// Index of the stored interval ([`Deferred::interval`]).
+    pub interval: usize,
+    /// Start point of Newton's method, s from the interval start.
+    pub s0: f64,
+    /// Upper bound of the extremum's value (|y| for peaks, y for overlaps).
+    pub upper: f64,
+}
+
+/// Deferred refinement (the cost of refining falls from every extremum that raises a
+/// running peak to the few that can be the final one): during the run, a candidate that
+/// passes the filters raises a running lower bound |h| − bound of its quantity's peak (used
+/// by the filters only) and is stored with its upper bound |h| + bound; at the end,
+/// candidates are refined in decreasing order of their upper bound, skipping those whose
+/// upper bound is below the exact peak so far. The final peaks are the maxima of the same
+/// exact values as refining at once would give.
+#[derive(Debug, Clone, Default)]
+pub struct Deferred {
+    nm: usize,
+    /// Per stored interval: x0, v0 and the held-contact loads (zeros if none), `nm` each.
+    x0: Vec<f64>,
+    v0: Vec<f64>,
+    fc: Vec<f64>,
+    /// Per stored interval: (a0, a1, tau, integrated length, sample time at its end, held).
+    meta: Vec<(f64, f64, f64, f64, f64, bool)>,
+    pub candidates: Vec<Candidate>,
+}
+
+/// A stored interval, as given back by [`Deferred::interval`].
+pub struct StoredInterval<'a> {
+    pub x0: &'a [f64],
+    pub v0: &'a [f64],
+    pub fc: Option<&'a [f64]>,
+    pub a0: f64,
+    pub a1: f64,
+    pub tau: f64,
+    /// Length integrated (the interval ends at `t_end`), s.
+    pub len: f64,
+    pub t_end: f64,
+}
+
+impl Deferred {
+    pub fn new(nm: usize) -> Self {
+        Deferred {
+            nm,
+            ..Default::default()
+        }
+    }
+
+    /// Stores the interval `iv` (integrated up to the sample at `t_end`); returns its index.
+    pub fn store(&mut self, iv: &Interval, t_end: f64) -> usize {
+        let nm = self.nm;
+        self.x0.extend_from_slice(&iv.x0[..nm]);
+        self.v0.extend_from_slice(&iv.v0[..nm]);
+        match &iv.fc {
+            Some(f) => self.fc.extend_from_slice(&f[..nm]),
+            None => self.fc.resize(self.fc.len() + nm, 0.0),
+        }
+        self.meta
+            .push((iv.a0, iv.a1, iv.tau, iv.tau_done, t_end, iv.fc.is_some()));
+        self.meta.len() - 1
+    }
+
+    /// The stored interval `k`.
+    pub fn interval(&self, k: usize) -> StoredInterval<'_> {
+        let (nm, r) = (self.nm, k * self.nm..(k + 1) * self.nm);
+        let (a0, a1, tau, len, t_end, held) = self.meta[k];
+        let _ = nm;
+        StoredInterval {
+            x0: &self.x0[r.clone()],
+            v0: &self.v0[r.clone()],
+            fc: held.then(|| &self.fc[r]),
+            a0,
+            a1,
+            tau,
+            len,
+            t_end,
+        }
+    }
+
+    /// Candidates in the order they are to be refined: decreasing upper bound (stable, so
+    /// chronological among equal bounds).
+    pub fn order(&self) -> Vec<usize> {
+        let mut o: Vec<usize> = (0..self.candidates.len()).collect();
+        o.sort_by(|&a, &b| {
+            self.candidates[b]
+                .upper
+                .total_cmp(&self.candidates[a].upper)
+        });
+        o
+    }
 }
 
 /// Bound on |y − H| over an interval of length `len`, H the cubic Hermite interpolant of

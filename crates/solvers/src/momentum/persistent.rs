@@ -21,9 +21,10 @@
 //! to zero (a plastic micro-impulse whose energy goes to the contact account), so that a
 //! release leaves the floors touching at rest, not drifting together.
 
-use super::impulse::{solve_checked, ContactGeom};
+use super::impulse::{self, solve_checked, ContactGeom};
 use super::modal::{Arc, Modal};
-use crate::SolverError;
+use super::stepper::{Step, Stepper};
+use crate::{PersistentContact, SolverError};
 
 /// χ(τ): displacement at τ of a mode (ω, ζ) under a unit constant load from rest,
 /// x'' + 2ζω x' + ω² x = 1, x(0) = x'(0) = 0.
@@ -130,5 +131,184 @@ mod tests {
             (x - exact).abs() <= 4.0 * f64::EPSILON * exact,
             "{x} vs {exact}"
         );
+    }
+}
+
+impl Stepper<'_> {
+    /// Instantaneous holding forces λ = W⁻¹ δ̈_free (N per unit modal mass, > 0 compressive)
+    /// of the contacts `set` in the state (x, v) under ground acceleration `a_g`, and for
+    /// each a round-off tolerance (1e-9 of the magnitude of the terms of δ̈_free, over W_cc).
+    pub(super) fn holding_forces(
+        &self,
+        set: &[usize],
+        x: &[f64],
+        v: &[f64],
+        a_g: f64,
+        time: f64,
+    ) -> Result<(Vec<f64>, Vec<f64>), SolverError> {
+        let (p, m) = (self.p, &self.p.modal);
+        let mut acc = vec![0.0; set.len()];
+        let mut tol = vec![0.0; set.len()];
+        for (k, &c) in set.iter().enumerate() {
+            let ct = &p.contacts[c];
+            let (mut a, mut sc) = (0.0, 0.0);
+            for n in 0..m.len() {
+                let g = ct.g[n];
+                if g != 0.0 {
+                    let w = m.omega[n];
+                    let (f, d, s) = (-m.gamma[n] * a_g, 2.0 * m.zeta[n] * w * v[n], w * w * x[n]);
+                    a += g * (f - d - s);
+                    sc += g.abs() * (f.abs() + d.abs() + s.abs());
+                }
+            }
+            acc[k] = a;
+            tol[k] = 1e-9 * sc / ct.dot(&ct.g);
+        }
+        let lam = impulse::solve_delassus(&p.contacts, set, acc, time, "holding forces")?;
+        Ok((lam, tol))
+    }
+
+    /// The held trajectory over [0, s] from the current state: constant forces that bring
+    /// every held gap back to δ = 0 at s (see [`persistent`]). Returns the modal loads of
+    /// the forces and the state at s.
+    pub(super) fn held_trial(
+        &self,
+        set: &[usize],
+        s: f64,
+    ) -> Result<(Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>), SolverError> {
+        let (p, m) = (self.p, &self.p.modal);
+        let (a0, a1) = (
+            p.ground(self.s.j, self.s.t),
+            p.ground(self.s.j, self.s.t + s),
+        );
+        let arc = |n: usize, extra: f64| {
+            Arc::new(
+                m.omega[n],
+                m.zeta[n],
+                self.s.x[n],
+                self.s.v[n],
+                -m.gamma[n] * a0 + extra,
+                -m.gamma[n] * a1 + extra,
+                s,
+            )
+        };
+        let free_end: Vec<f64> = (0..m.len()).map(|n| arc(n, 0.0).xv(s).0).collect();
+        let dfree: Vec<f64> = set
+            .iter()
+            .map(|&c| p.contacts[c].delta(&free_end))
+            .collect();
+        let lam = contact_forces(m, &p.contacts, set, s, &dfree, self.s.t)?;
+        let mut fc = vec![0.0; m.len()];
+        for (k, &c) in set.iter().enumerate() {
+            for (f, g) in fc.iter_mut().zip(&p.contacts[c].g) {
+                *f -= g * lam[k];
+            }
+        }
+        let (mut x, mut v) = (vec![0.0; m.len()], vec![0.0; m.len()]);
+        for n in 0..m.len() {
+            (x[n], v[n]) = arc(n, fc[n]).xv(s);
+        }
+        Ok((fc, x, v, lam))
+    }
+
+    /// Smallest holding force (relative to its tolerance) at the end of the held trial of
+    /// length s, and the contact (index into `set`) it belongs to.
+    pub(super) fn held_end_force(
+        &self,
+        set: &[usize],
+        s: f64,
+    ) -> Result<(f64, usize), SolverError> {
+        let (x, v) = if s > 0.0 {
+            let (_, x, v, _) = self.held_trial(set, s)?;
+            (x, v)
+        } else {
+            (self.s.x.clone(), self.s.v.clone())
+        };
+        let a1 = self.p.ground(self.s.j, self.s.t + s);
+        let (lam, tol) = self.holding_forces(set, &x, &v, a1, self.s.t + s)?;
+        Ok(lam
+            .iter()
+            .zip(&tol)
+            .enumerate()
+            .map(|(k, (l, t))| (l / t.max(f64::MIN_POSITIVE), k))
+            .fold((f64::INFINITY, 0), |a, b| if b.0 < a.0 { b } else { a }))
+    }
+
+    /// Ends the persistent phase of `set[k]` now.
+    pub(super) fn release(&mut self, contact: usize) -> Step {
+        let t = self.s.t;
+        if let Some(i) = self.s.persistent.iter().position(|&(c, _)| c == contact) {
+            let (c, start) = self.s.persistent.remove(i);
+            if t > start {
+                self.phases.push(PersistentContact {
+                    contact: c,
+                    start,
+                    end: t,
+                    released_by: "tension".into(),
+                });
+            }
+        }
+        self.grazing[contact] = true;
+        self.stats.events += 1;
+        Step::Released { contact, time: t }
+    }
+
+    /// A segment with contacts held together (δ = 0). The phase of a contact ends where its
+    /// instantaneous holding force turns tensile: at the segment start if it already is,
+    /// else at the instant located by Brent's method on the held trajectory.
+    pub(super) fn persistent_segment(&mut self, tau: f64, t_end: f64) -> Result<Step, SolverError> {
+        let p = self.p;
+        let set: Vec<usize> = self.s.persistent.iter().map(|&(c, _)| c).collect();
+        let a0 = p.ground(self.s.j, self.s.t);
+        let (lam0, tol0) = self.holding_forces(&set, &self.s.x, &self.s.v, a0, self.s.t)?;
+        if let Some(k) = (0..set.len())
+            .filter(|&k| lam0[k] < -tol0[k])
+            .min_by(|&a, &b| (lam0[a] / tol0[a]).total_cmp(&(lam0[b] / tol0[b])))
+        {
+            return Ok(self.release(set[k]));
+        }
+        let (f_end, k_end) = self.held_end_force(&set, tau)?;
+        let (s_hold, release) = if f_end < -1.0 {
+            // The force turns tensile inside: locate where (f(0) ≥ −1 ≥ f(τ)).
+            let err = std::cell::RefCell::new(None);
+            let f = |s: f64| match self.held_end_force(&set, s) {
+                Ok((v, _)) => v + 1.0,
+                Err(e) => {
+                    err.borrow_mut().get_or_insert(e);
+                    f64::NAN
+                }
+            };
+            let mut conv = super::events::Conv {
+                tol: 2.0 * f64::EPSILON * (self.s.t + tau) + 1e-300,
+                iterations: 0,
+            };
+            let r = roots::find_root_brent(0.0, tau, f, &mut conv);
+            if let Some(e) = err.into_inner() {
+                return Err(e);
+            }
+            self.stats.root_iterations += conv.iterations as u64 + 1;
+            (r.unwrap_or(0.0).clamp(0.0, tau), Some(set[k_end]))
+        } else {
+            (tau, None)
+        };
+        if s_hold <= 0.0 {
+            if let Some(c) = release {
+                return Ok(self.release(c));
+            }
+        }
+        let (fc, _, _, lam) = self.held_trial(&set, s_hold)?;
+        let full = s_hold == tau;
+        let t_stop = if full { t_end } else { self.s.t + s_hold };
+        for (&c, &l) in set.iter().zip(&lam) {
+            self.held_force[c] = l;
+        }
+        let step = self.segment(s_hold, t_stop, Some(&fc), full);
+        self.held_force.fill(0.0);
+        let step = step?;
+        self.project_held(&set)?;
+        match (step, release) {
+            (Step::Reached, Some(c)) => Ok(self.release(c)),
+            (step, _) => Ok(step),
+        }
     }
 }

@@ -1,0 +1,288 @@
+//! Impact resolution at a contact closure (paper eqs 19–24, see [`super::impulse`]):
+//! classify the closing contacts (approaching: impact; touching: hold or graze;
+//! separating: ignore), capture chattering into persistent contact, apply the
+//! consistent or paper impulse (with the consistent correction after a paper impulse
+//! that leaves the floors approaching), and book the kinetic-energy loss
+//! ½Σ(q̇⁺² − q̇⁻²) to the contact account.
+
+use structure::scene::ImpulseVariant;
+
+use super::impulse;
+use super::stepper::Stepper;
+use crate::{Impact, SolverError};
+
+/// Per-impact diagnostics not in the JSON output (used by tests).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ImpactDiagnostics {
+    pub time: f64,
+    pub contacts: Vec<usize>,
+    /// Σ Γ_n q̇_n over all buildings before and after (physical momentum with all modes), N·s.
+    pub momentum_before: f64,
+    pub momentum_after: f64,
+    pub kinetic_before: f64,
+    pub kinetic_after: f64,
+    /// A consistent correction followed the paper impulse (floors still approaching).
+    pub corrected: bool,
+    /// The event started a persistent-contact phase.
+    pub captured: bool,
+}
+
+impl Stepper<'_> {
+    /// Resolves the contacts found closing now (see [`super::impulse`]).
+    ///
+    /// Only an *approaching* contact is an impact. A contact found closed while its floors
+    /// separate (δ̇ < −`capture_velocity`) is not: nothing happens. A contact touching
+    /// (|δ̇| ≤ `capture_velocity`) is not an impact either: it joins the held set if holding
+    /// it needs a compressive force, and is left to graze otherwise (with persistent contact
+    /// off, a touching contact under compression is the accumulation point of chattering:
+    /// [`SolverError::Stalled`]; one still approaching, 0 < δ̇ ≤ `capture_velocity`, is an
+    /// impact as any other). Only impacts feed the impact-rate guard.
+    pub fn impact(&mut self, closing: &[usize]) -> Result<(), SolverError> {
+        let p = self.p;
+        let t = self.s.t;
+        self.stats.events += 1;
+        let mut contacts = Vec::with_capacity(closing.len());
+        let mut touching = Vec::new();
+        let cap = p.options.capture_velocity;
+        for &c in closing {
+            let v = p.contacts[c].dot(&self.s.v);
+            if v < -cap {
+                // Separating: not an impact (a round-off closure while the floors part).
+                self.grazing[c] = true;
+            } else if v > cap || (v > 0.0 && !p.options.persistent_contact) {
+                contacts.push(c);
+            } else {
+                touching.push(c);
+            }
+        }
+        if !touching.is_empty() {
+            let held: Vec<usize> = self.s.persistent.iter().map(|&(c, _)| c).collect();
+            let mut set = held.clone();
+            set.extend(&touching);
+            let a_g = p.ground(self.s.j, t);
+            let (lam, tol) = self.holding_forces(&set, &self.s.x, &self.s.v, a_g, t)?;
+            let mut join = held;
+            let mut graze = Vec::new();
+            // Joins unless the force it would need is tensile beyond round-off (a force
+            // within ±tol is held: harmless, and the release is then located when it turns
+            // tensile, instead of grazing again and again at the same state).
+            for (k, &c) in set.iter().enumerate().skip(join.len()) {
+                if lam[k] >= -tol[k] && !p.options.persistent_contact {
+                    return Err(SolverError::Stalled {
+                        time: t,
+                        reason: format!(
+                            "contact {c} touches at rest under a compressive force (the \
+                             accumulation point of chattering impacts, c_r = {}); without \
+                             persistent contact (momentum.persistent_contact = false) the \
+                             method cannot go on",
+                            p.contacts[c].restitution
+                        ),
+                    });
+                }
+                if lam[k] >= -tol[k] {
+                    join.push(c);
+                    self.s.persistent.push((c, t));
+                    self.last_impacts[c].clear();
+                } else {
+                    graze.push(c);
+                }
+                self.grazing[c] = true;
+            }
+            // Held contacts and grazing ones lose their (at most capture_velocity) approach
+            // speed: a plastic micro-impulse, so that a grazing pair separates (δ̈ < 0).
+            join.extend(&graze);
+            if !join.is_empty() {
+                self.project_held(&join)?;
+            }
+        }
+        if contacts.is_empty() {
+            return Ok(());
+        }
+        let contacts = &contacts[..];
+        for &c in contacts {
+            self.guard.record(t, || {
+                format!(
+                    "contact {c} (c_r = {}) keeps impacting; persistent_contact = {}",
+                    p.contacts[c].restitution, p.options.persistent_contact
+                )
+            })?;
+        }
+        let v_before: Vec<f64> = contacts
+            .iter()
+            .map(|&c| p.contacts[c].dot(&self.s.v))
+            .collect();
+        let (mom0, ke0) = (self.momentum(), self.kinetic());
+        // Capture into persistent contact?
+        let mut captured = vec![false; contacts.len()];
+        for (k, &c) in contacts.iter().enumerate() {
+            let hist = &mut self.last_impacts[c];
+            hist.push_back(t);
+            if hist.len() > 3 {
+                hist.pop_front();
+            }
+            let accumulating = hist.len() == 3 && {
+                let (d1, d2) = (hist[1] - hist[0], hist[2] - hist[1]);
+                let r = d2 / d1;
+                d1 > 0.0
+                    && r < 1.0
+                    && d2 < p.h
+                    && d2 * r / (1.0 - r) < p.h
+                    && p.contacts[c].restitution < 1.0
+            };
+            captured[k] = p.options.persistent_contact
+                && (v_before[k] < p.options.capture_velocity || accumulating);
+        }
+        let e_eff: Vec<f64> = contacts
+            .iter()
+            .zip(&captured)
+            .map(|(&c, &cap)| if cap { 0.0 } else { p.contacts[c].restitution })
+            .collect();
+        let mut corrected = false;
+        let mut impulses: Vec<f64> = vec![0.0; contacts.len()];
+        let mut v_after_report: Vec<f64> = vec![0.0; contacts.len()];
+        match p.options.impulse {
+            ImpulseVariant::Consistent => {
+                let target: Vec<f64> = v_before
+                    .iter()
+                    .zip(&e_eff)
+                    .map(|(v, e)| (1.0 + e) * v.max(0.0))
+                    .collect();
+                let imp = impulse::lcp_impulses(&p.contacts, contacts, &target, t)?;
+                impulse::apply(&p.contacts, &imp, &mut self.s.v);
+                for (c, pc) in imp {
+                    let k = contacts.iter().position(|&x| x == c).unwrap();
+                    impulses[k] = pc;
+                }
+                for (k, &c) in contacts.iter().enumerate() {
+                    v_after_report[k] = p.contacts[c].dot(&self.s.v);
+                }
+            }
+            ImpulseVariant::Paper => {
+                let normal: Vec<usize> = contacts
+                    .iter()
+                    .zip(&captured)
+                    .filter(|(_, &cap)| !cap)
+                    .map(|(&c, _)| c)
+                    .collect();
+                let imp = impulse::apply_paper(&p.modal, &p.contacts, &normal, &mut self.s.v);
+                for (c, pc) in imp {
+                    let k = contacts.iter().position(|&x| x == c).unwrap();
+                    impulses[k] = pc;
+                }
+                for (k, &c) in contacts.iter().enumerate() {
+                    v_after_report[k] = p.contacts[c].dot(&self.s.v);
+                }
+                // Correction: contacts still approaching (or captured) get a consistent
+                // impulse to v⁺ = −e_eff v⁻.
+                let mut corr_set = vec![];
+                let mut target = vec![];
+                for (k, &c) in contacts.iter().enumerate() {
+                    let va = p.contacts[c].dot(&self.s.v);
+                    if captured[k] || va > 0.0 {
+                        if !captured[k] {
+                            corrected = true;
+                        }
+                        corr_set.push(c);
+                        target.push(va + e_eff[k] * v_before[k].max(0.0));
+                    }
+                }
+                if !corr_set.is_empty() {
+                    let imp = impulse::lcp_impulses(&p.contacts, &corr_set, &target, t)?;
+                    impulse::apply(&p.contacts, &imp, &mut self.s.v);
+                    for (c, pc) in imp {
+                        let k = contacts.iter().position(|&x| x == c).unwrap();
+                        impulses[k] += pc;
+                        if captured[k] {
+                            v_after_report[k] = p.contacts[c].dot(&self.s.v);
+                        }
+                    }
+                }
+                if corrected {
+                    self.diag.corrections += 1;
+                }
+            }
+        }
+        let (mom1, ke1) = (self.momentum(), self.kinetic());
+        self.energy.contact += ke0 - ke1;
+        for (k, &c) in contacts.iter().enumerate() {
+            let vb = v_before[k];
+            let undefined = if vb <= p.options.capture_velocity {
+                Some("touching: approach speed at most momentum.capture_velocity")
+            } else if captured[k] {
+                Some("chattering capture: the accumulating impacts resolved as one plastic impulse")
+            } else {
+                None
+            };
+            self.impacts.push(Impact {
+                contact: c,
+                time: t,
+                relative_velocity_before: vb,
+                relative_velocity_after: v_after_report[k],
+                // Undefined for a touching contact (approach at most capture_velocity, with
+                // persistent contact off) and for a chattering capture (the accumulating
+                // sequence of impacts resolved as one plastic impulse): see `restitution`.
+                achieved_restitution: restitution(vb, v_after_report[k], undefined),
+                restitution_undefined: undefined.map(String::from),
+                impulse: impulses[k],
+                duration: None,
+                peak_force: None,
+                max_penetration: None,
+            });
+            self.stats.impacts += 1;
+            self.grazing[c] = true;
+            if captured[k] && !self.s.persistent.iter().any(|&(x, _)| x == c) {
+                self.s.persistent.push((c, t));
+                self.last_impacts[c].clear();
+            }
+        }
+        self.diag.impacts.push(ImpactDiagnostics {
+            time: t,
+            contacts: contacts.to_vec(),
+            momentum_before: mom0,
+            momentum_after: mom1,
+            kinetic_before: ke0,
+            kinetic_after: ke1,
+            corrected,
+            captured: captured.iter().any(|&c| c),
+        });
+        if !self.s.v.iter().sum::<f64>().is_finite() {
+            return Err(SolverError::NonFinite {
+                time: t,
+                context: "modal velocities after an impulse".into(),
+            });
+        }
+        self.refresh_rates();
+        Ok(())
+    }
+
+    /// Sets the relative velocity of the held contacts to zero (a plastic micro-impulse;
+    /// its kinetic energy goes to the contact account).
+    pub(super) fn project_held(&mut self, set: &[usize]) -> Result<(), SolverError> {
+        let p = self.p;
+        let vrel: Vec<f64> = set.iter().map(|&c| p.contacts[c].dot(&self.s.v)).collect();
+        let imp = impulse::solve_delassus(&p.contacts, set, vrel, self.s.t, "held contacts")?;
+        let ke0 = self.kinetic();
+        let pairs: Vec<(usize, f64)> = set.iter().copied().zip(imp).collect();
+        impulse::apply(&p.contacts, &pairs, &mut self.s.v);
+        self.energy.contact += ke0 - self.kinetic();
+        self.refresh_rates();
+        Ok(())
+    }
+}
+
+/// The restitution an impact achieved, −v⁺/v⁻, or NaN when `undefined` gives a reason.
+/// Values outside [0, 1] by no more than 1e-12 (round-off of v⁺ = −c_r v⁻) are put on the
+/// interval; a larger excursion is reported as computed.
+pub(crate) fn restitution(v_before: f64, v_after: f64, undefined: Option<&str>) -> f64 {
+    if undefined.is_some() {
+        return f64::NAN;
+    }
+    let r = -v_after / v_before;
+    if (-1e-12..=0.0).contains(&r) {
+        0.0
+    } else if r > 1.0 && r <= 1.0 + 1e-12 {
+        1.0
+    } else {
+        r
+    }
+}

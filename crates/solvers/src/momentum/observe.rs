@@ -1,0 +1,411 @@
+//! Observation of every accepted segment: floor displacements u = Φq and velocities
+//! u̇ = Φq̇ per building (eq. 26), story shears V_j = k_j (u_j − u_{j−1}), their sampled and
+//! continuous peaks ([`super::peaks`]), the overlap audit ([`crate::overlap`]) and the
+//! history ([`crate::response::ResponseTracker`]).
+//!
+//! The sample work is branch-free and vectorisable; only a quantity whose rate ẏ changes
+//! sign over the interval just integrated (an interior extremum, about 2 % of them on the
+//! paper scene) takes the slow path: Hermite estimate, cheap filter, rigorous Hermite
+//! error bound, and, if it may raise the peak, a deferred candidate refined at the end of
+//! the run ([`peaks::Deferred`]).
+//!
+//! **Energy envelope.** A building whose response cannot reach any of its peaks over the
+//! interval is not observed at all. For y = Σ_n c_n q_n over the building's modes,
+//! Cauchy–Schwarz with weights ω_n² gives |y| ≤ f_y √(Σ ω_n² q_n²) ≤ f_y √(2E_b), with
+//! f_y = √(Σ c_n²/ω_n²) (a static flexibility) and E_b = ½Σ(q̇_n² + ω_n² q_n²); between
+//! events d√(2E_b)/dt ≤ ‖Γ_b‖ |a_g| (damping only removes energy), so over an interval of
+//! length len, √(2E_b(s)) ≤ R_b = √(2E_b(0)) + len ‖Γ_b‖ max(|a₀|, |a₁|). If
+//! R_b < min_y peak_y/f_y, no displacement or shear of the building can reach its running
+//! peak (exact or the lower bound of a pending candidate) in the interval: the sample and
+//! the extremum checks are skipped, exactly (the peaks are the same). The overlap audit
+//! is skipped likewise when f_y √(R_l² + R_r²) is below every pair's running maximum, else
+//! every building is observed. Not used with a history, nor with held contacts (their
+//! forces are loads the bound does not include).
+
+use super::peaks::{self, Candidate, Target};
+use super::stepper::Stepper;
+
+impl Stepper<'_> {
+    /// Observes the current instant (see module docs).
+    #[inline(always)]
+    pub(super) fn observe(&mut self) {
+        let len = self.interval.tau_done;
+        self.arcs_for = None;
+        let mut stored: Option<usize> = None;
+        let nb = self.p.modal.buildings.len();
+        let skip_overlaps = self.envelope(len);
+        for b in 0..nb {
+            if self.skip[b] {
+                self.prev_valid[b] = false;
+                continue;
+            }
+            let bm = &self.p.modal.buildings[b];
+            let nf = bm.n_floors;
+            if len > 0.0 && !self.prev_valid[b] {
+                // The previous sample was skipped: the rates and values at the interval
+                // start, from its modal state.
+                let (x0, v0) = (&self.interval.x0, &self.interval.v0);
+                bm.to_floors2(x0, v0, &mut self.u_prev[b], &mut self.ud_prev[b]);
+            }
+            bm.to_floors2(&self.s.x, &self.s.v, &mut self.u[b], &mut self.ud[b]);
+            let (u, ud) = (&self.u[b][..nf], &self.ud[b][..nf]);
+            let (dm, sm, k) = (
+                &mut self.disp_max[b][..nf],
+                &mut self.shear_max[b][..nf],
+                &self.stiffness[b][..nf],
+            );
+            let mut raised = false;
+            for i in 0..nf {
+                let d = u[i].abs();
+                raised |= d > dm[i];
+                dm[i] = if d > dm[i] { d } else { dm[i] };
+            }
+            let v0 = (k[0] * u[0]).abs();
+            raised |= v0 > sm[0];
+            sm[0] = if v0 > sm[0] { v0 } else { sm[0] };
+            for i in 1..nf {
+                let vs = (k[i] * (u[i] - u[i - 1])).abs();
+                raised |= vs > sm[i];
+                sm[i] = if vs > sm[i] { vs } else { sm[i] };
+            }
+            self.env_stale[b] |= raised;
+            if len > 0.0 {
+                // Rates at both ends of the interval: a sign change flags an interior
+                // extremum (rare); the flagged quantities go to the slow path.
+                let (udp, flags) = (&self.ud_prev[b][..nf], &mut self.flags);
+                flags.clear();
+                for i in 0..nf {
+                    if udp[i] * ud[i] < 0.0 {
+                        flags.push((i, false));
+                    }
+                    let (vb, vbp) = if i > 0 {
+                        (ud[i - 1], udp[i - 1])
+                    } else {
+                        (0.0, 0.0)
+                    };
+                    if (k[i] * (udp[i] - vbp)) * (k[i] * (ud[i] - vb)) < 0.0 {
+                        flags.push((i, true));
+                    }
+                }
+                for f in 0..self.flags.len() {
+                    let (i, story) = self.flags[f];
+                    self.interior_extremum(b, i, story, len, &mut stored);
+                }
+            }
+            if self.history.is_some() {
+                self.tracker.observe(b, &self.u[b][..nf]);
+                self.tracker.observe_velocity(b, &self.ud[b][..nf]);
+            }
+            // The envelope threshold min_y peak_y/f_y, recomputed when a peak (or a lower
+            // bound) has grown: peaks only grow, so an older threshold is a safe one.
+            if !self.env_stale[b] {
+                continue;
+            }
+            self.env_stale[b] = false;
+            let (inv_d, inv_s) = self.env_inv[b][..2 * nf].split_at(nf);
+            let (dm, dl) = (&self.disp_max[b][..nf], &self.disp_lower[b][..nf]);
+            let (sm, sl) = (&self.shear_max[b][..nf], &self.shear_lower[b][..nf]);
+            let mut thr = f64::INFINITY;
+            for i in 0..nf {
+                let (pd, ps) = (dm[i].max(dl[i]) * inv_d[i], sm[i].max(sl[i]) * inv_s[i]);
+                thr = thr.min(pd).min(ps);
+            }
+            self.env_thr[b] = thr;
+        }
+        if !self.overlaps.is_empty() && !skip_overlaps {
+            self.observe_overlaps(len, &mut stored);
+        }
+        for b in 0..nb {
+            if !self.skip[b] {
+                // The current sample becomes the previous one (buffers exchanged).
+                std::mem::swap(&mut self.u_prev[b], &mut self.u[b]);
+                std::mem::swap(&mut self.ud_prev[b], &mut self.ud[b]);
+                self.prev_valid[b] = true;
+            }
+        }
+        if self.history.is_some() {
+            self.tracker.observe_contact_forces(&self.held_force);
+            self.tracker.sample(self.s.t, self.history.as_deref_mut());
+        }
+    }
+
+    /// Sets `skip` per building from the energy envelope (see module docs) and returns
+    /// whether the overlap audit can be skipped too.
+    #[inline(always)]
+    fn envelope(&mut self, len: f64) -> bool {
+        self.skip.fill(false);
+        if !(len > 0.0) || self.history.is_some() || self.interval.fc.is_some() {
+            return false;
+        }
+        let (p, iv) = (self.p, &self.interval);
+        let amax = iv.a0.abs().max(iv.a1.abs());
+        let mut any = false;
+        for (b, bm) in p.modal.buildings.iter().enumerate() {
+            let r = bm.range.clone();
+            let (x, v, w2) = (&iv.x0[r.clone()], &iv.v0[r.clone()], &p.omega2[r]);
+            // Four partial sums (the order does not matter: the margin below covers it).
+            let mut acc = [0.0f64; 4];
+            let n4 = x.len() / 4 * 4;
+            for ((xc, vc), wc) in x[..n4]
+                .chunks_exact(4)
+                .zip(v[..n4].chunks_exact(4))
+                .zip(w2[..n4].chunks_exact(4))
+            {
+                for k in 0..4 {
+                    acc[k] += vc[k] * vc[k] + wc[k] * xc[k] * xc[k];
+                }
+            }
+            for n in n4..x.len() {
+                acc[0] += v[n] * v[n] + w2[n] * x[n] * x[n];
+            }
+            let e2 = (acc[0] + acc[1]) + (acc[2] + acc[3]);
+            // A relative margin of 1e-9 covers the round-off of the bound itself.
+            let rb = (e2.sqrt() + len * self.env_gamma[b] * amax) * (1.0 + 1e-9);
+            self.env_r[b] = rb;
+            self.skip[b] = rb < self.env_thr[b];
+            any |= self.skip[b];
+        }
+        if self.overlaps.is_empty() {
+            return true;
+        }
+        for (k, op) in self.overlaps.pairs.iter().enumerate() {
+            let (rl, rr) = (self.env_r[op.left], self.env_r[op.right]);
+            // √(R_l² + R_r²) < best/f_y, squared (best > 0 needed, the bound is ≥ 0).
+            let lim = self.overlaps.max[k].max(self.overlap_lower[k]) * self.overlap_inv[k];
+            if !(lim > 0.0 && (rl * rl + rr * rr) * (1.0 + 1e-9) < lim * lim) {
+                // This pair may reach its maximum: observe every building.
+                if any {
+                    self.skip.fill(false);
+                }
+                return false;
+            }
+        }
+        true
+    }
+
+    /// The slow path of one flagged quantity of building `b` (floor displacement `i`, or
+    /// story shear `i` if `story`): Hermite estimate h of the interior extremum; a cheap
+    /// filter (the Hermite error is a small fraction of the content at the interval's
+    /// frequencies, (ω len)⁴/384 ≤ 3e-3 for ω len ≤ 1, so an estimate below 90 % of the
+    /// running peak cannot raise it); the rigorous bound |y − H| ≤ len⁴/384·Σ|c|ω⁴|A − iB|;
+    /// a candidate for the end of the run if |h| + bound reaches the running peak.
+    #[cold]
+    fn interior_extremum(
+        &mut self,
+        b: usize,
+        i: usize,
+        story: bool,
+        len: f64,
+        stored: &mut Option<usize>,
+    ) {
+        let (u, ud, up, udp) = (&self.u[b], &self.ud[b], &self.u_prev[b], &self.ud_prev[b]);
+        let (below, below_p, vb, vbp) = if story && i > 0 {
+            (u[i - 1], up[i - 1], ud[i - 1], udp[i - 1])
+        } else {
+            (0.0, 0.0, 0.0, 0.0)
+        };
+        let sc = if story { self.stiffness[b][i] } else { 1.0 };
+        let (y0, yd0) = (sc * (up[i] - below_p), sc * (udp[i] - vbp));
+        let (y1, yd1) = (sc * (u[i] - below), sc * (ud[i] - vb));
+        let (exact, lower) = if story {
+            (self.shear_max[b][i], self.shear_lower[b][i])
+        } else {
+            (self.disp_max[b][i], self.disp_lower[b][i])
+        };
+        let peak = exact.max(lower);
+        // |H| ≤ max(|y0|, |y1|) + 4/27 len (|ẏ0| + |ẏ1|) (the Hermite basis functions of
+        // the values are ≥ 0 and sum to 1, those of the slopes are at most 4/27 in size):
+        // most flagged extrema are far below the peak and need no Hermite estimate.
+        let cubic_bound = y0.abs().max(y1.abs()) + 4.0 / 27.0 * len * (yd0.abs() + yd1.abs());
+        if cubic_bound * (1.0 + 1e-9) < 0.9 * peak {
+            return;
+        }
+        let Some((th, h)) = peaks::hermite_extremum(y0, yd0, y1, yd1, len) else {
+            return;
+        };
+        if h.abs() < 0.9 * peak {
+            return;
+        }
+        let p = self.p;
+        let bm = &p.modal.buildings[b];
+        let (nmb, first, nf) = (bm.range.len(), bm.range.start, bm.n_floors);
+        let coef = &mut self.coef[..nmb];
+        if story {
+            coef.copy_from_slice(&self.shear_rows[b][i * nmb..(i + 1) * nmb]);
+        } else {
+            for (m, c) in coef.iter_mut().enumerate() {
+                *c = bm.phi[m * nf + i];
+            }
+        }
+        if self.arcs_for != Some(b) {
+            self.obs_arcs = peaks::arcs(&p.modal, bm.range.clone(), &self.interval);
+            self.arcs_for = Some(b);
+        }
+        let bound = peaks::hermite_error_bound(&p.modal, first, coef, &self.obs_arcs, len);
+        if h.abs() + bound < peak {
+            return;
+        }
+        let lb = h.abs() - bound;
+        if story {
+            self.shear_lower[b][i] = lower.max(lb);
+        } else {
+            self.disp_lower[b][i] = lower.max(lb);
+        }
+        self.env_stale[b] = true;
+        let interval = *stored.get_or_insert_with(|| self.deferred.store(&self.interval, self.s.t));
+        self.deferred.candidates.push(Candidate {
+            target: if story {
+                Target::Shear {
+                    building: b,
+                    story: i,
+                }
+            } else {
+                Target::Displacement {
+                    building: b,
+                    floor: i,
+                }
+            },
+            interval,
+            s0: th * len,
+            upper: h.abs() + bound,
+        });
+    }
+
+    /// The overlap audit at the current sample: u_left − u_right of every audited pair at
+    /// the sample and, when its rate changes sign from + to − over the interval since the
+    /// previous sample (length `len`), a candidate interior maximum, found as the
+    /// story-shear and displacement peaks are (Hermite estimate, cheap filter, rigorous
+    /// Hermite error bound over both buildings' modes, deferred refinement).
+    #[inline(always)]
+    fn observe_overlaps(&mut self, len: f64, stored: &mut Option<usize>) {
+        let t = self.s.t;
+        for k in 0..self.overlaps.pairs.len() {
+            let (u, ud, up, udp) = (&self.u, &self.ud, &self.u_prev, &self.ud_prev);
+            let op = &self.overlaps.pairs[k];
+            let (l, i, r, j) = (op.left, op.left_dof, op.right, op.right_dof);
+            let y1 = u[l][i] - u[r][j];
+            self.overlaps.offer(k, t, y1);
+            if len <= 0.0 {
+                continue;
+            }
+            let (y0, yd0, yd1) = (
+                up[l][i] - up[r][j],
+                udp[l][i] - udp[r][j],
+                ud[l][i] - ud[r][j],
+            );
+            if yd0 <= 0.0 || yd1 >= 0.0 {
+                continue;
+            }
+            let best = self.overlaps.max[k].max(self.overlap_lower[k]);
+            // H ≤ max(y0, y1) + 4/27 len (|ẏ0| + |ẏ1|) (see `interior_extremum`), and the
+            // filter below drops h < best/1.1 (best > 0) or h < best/0.9 (best ≤ 0).
+            let cubic_bound = y0.max(y1) + 4.0 / 27.0 * len * (yd0.abs() + yd1.abs());
+            let bound = cubic_bound + 1e-9 * cubic_bound.abs();
+            if bound + 0.1 * bound.abs() < best {
+                continue;
+            }
+            let Some((th, h)) = peaks::hermite_extremum(y0, yd0, y1, yd1, len) else {
+                continue;
+            };
+            // Cheap filter, as for the peaks: the Hermite error is a small fraction of the
+            // content at the interval's frequencies.
+            if h + 0.1 * h.abs() < best {
+                continue;
+            }
+            let modal = &self.p.modal;
+            if self.arcs_for != Some(usize::MAX) {
+                self.obs_arcs = peaks::arcs(modal, 0..modal.len(), &self.interval);
+                self.arcs_for = Some(usize::MAX);
+            }
+            let c = &self.overlap_rows[k];
+            let bound = peaks::hermite_error_bound(modal, 0, c, &self.obs_arcs, len);
+            if h + bound < best {
+                continue;
+            }
+            self.overlap_lower[k] = self.overlap_lower[k].max(h - bound);
+            let interval =
+                *stored.get_or_insert_with(|| self.deferred.store(&self.interval, self.s.t));
+            self.deferred.candidates.push(Candidate {
+                target: Target::Overlap { pair: k },
+                interval,
+                s0: th * len,
+                upper: h + bound,
+            });
+        }
+    }
+
+    /// Refines the deferred candidates (see [`peaks::Deferred`]) into the exact peaks and
+    /// overlap maxima.
+    pub(super) fn resolve_deferred(&mut self) {
+        let p = self.p;
+        let modal = &p.modal;
+        let order = self.deferred.order();
+        for k in order {
+            let c = self.deferred.candidates[k];
+            let iv = self.deferred.interval(c.interval);
+            let best = match c.target {
+                Target::Displacement { building, floor } => self.disp_max[building][floor],
+                Target::Shear { building, story } => self.shear_max[building][story],
+                Target::Overlap { pair } => self.overlaps.max[pair],
+            };
+            if c.upper < best {
+                continue;
+            }
+            match c.target {
+                Target::Overlap { pair } => {
+                    let a = peaks::arcs_of(
+                        modal,
+                        0..modal.len(),
+                        iv.x0,
+                        iv.v0,
+                        iv.fc,
+                        iv.a0,
+                        iv.a1,
+                        iv.tau,
+                    );
+                    let (s, y) =
+                        peaks::refine_at(modal, 0, &self.overlap_rows[pair], &a, iv.len, c.s0);
+                    self.overlaps.offer(pair, iv.t_end - iv.len + s, y);
+                }
+                Target::Displacement {
+                    building: b,
+                    floor: i,
+                }
+                | Target::Shear {
+                    building: b,
+                    story: i,
+                } => {
+                    let bm = &modal.buildings[b];
+                    let (nmb, first, nf) = (bm.range.len(), bm.range.start, bm.n_floors);
+                    let story = matches!(c.target, Target::Shear { .. });
+                    let coef = &mut self.coef[..nmb];
+                    if story {
+                        coef.copy_from_slice(&self.shear_rows[b][i * nmb..(i + 1) * nmb]);
+                    } else {
+                        for (m, cf) in coef.iter_mut().enumerate() {
+                            *cf = bm.phi[m * nf + i];
+                        }
+                    }
+                    let a = peaks::arcs_of(
+                        modal,
+                        bm.range.clone(),
+                        iv.x0,
+                        iv.v0,
+                        iv.fc,
+                        iv.a0,
+                        iv.a1,
+                        iv.tau,
+                    );
+                    let y = peaks::refine(modal, first, coef, &a, iv.len, c.s0).abs();
+                    let m = if story {
+                        &mut self.shear_max[b][i]
+                    } else {
+                        &mut self.disp_max[b][i]
+                    };
+                    *m = m.max(y);
+                }
+            }
+        }
+        self.deferred.candidates.clear();
+    }
+}
