@@ -108,7 +108,9 @@ pub fn solve(scene: &Scene, history: Option<&mut History>) -> Result<RunOutput, 
             context: "floor state at the end of the analysis".into(),
         });
     }
-    let initial = sys.mech_energy(&sys.stories(), &sys.u0, &sys.v0);
+    let mut stories0 = sys.stories();
+    stories0.start(&sys.u0, &sys.v0);
+    let initial = sys.mech_energy(&stories0, &sys.u0, &sys.v0);
     let final_ = sys.mech_energy(&run.stories, &y[..n], &y[n..2 * n]);
     let (input, damping) = (y[2 * n], y[2 * n + 1]);
     let contact = y[2 * n + 2] + run.contact_loss;

@@ -12,8 +12,9 @@ use crate::gap::dopri::Dopri5;
 use crate::gap::stories::Kink;
 use crate::gap::{Segment, Stories, System};
 use crate::momentum::events::Conv;
+use crate::momentum::impact::restitution;
 use crate::momentum::impulse::{self, ContactGeom};
-use crate::momentum::stepper::{restitution, SIMULTANEOUS};
+use crate::momentum::problem::SIMULTANEOUS;
 use crate::overlap::OverlapTracker;
 use crate::response::ResponseTracker;
 use crate::rules::ImpactRateGuard;
@@ -603,6 +604,12 @@ pub(crate) fn run<'a>(
         }
     }
 
+    // An initial drift beyond yield starts its story on the yield surface (as the gap
+    // element's integrators do), before the initial energy is taken.
+    {
+        let (u0, v0) = r.y[..2 * n].split_at(n);
+        r.stories.start(u0, v0);
+    }
     let mut tracker = ResponseTracker::new(scene);
     let mut overlaps = OverlapTracker::new(scene);
     let observe = |r: &Run, tracker: &mut ResponseTracker, history: Option<&mut History>, ag| {
