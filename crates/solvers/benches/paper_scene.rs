@@ -4,7 +4,9 @@
 //! - `momentum` — the paper's method, consistent impulse, all modes;
 //! - `gap/k=1e12/tol=1e-4` — adaptive Dormand–Prince, linear law, k = 1e12 N/m;
 //! - `gap/k=1e10/tol=1e-4` — adaptive, Kelvin–Voigt, k = 1e10 N/m;
-//! - `newmark/k=1e10/dt=1e-3` — fixed-step Newmark, Kelvin–Voigt, k = 1e10 N/m, Δt = 1 ms.
+//! - `newmark/k=1e10/dt=1e-3` — fixed-step Newmark, Kelvin–Voigt, k = 1e10 N/m, Δt = 1 ms;
+//! - `impulse/tol=1e-4` — the impulse method (the paper's impact law on the physical floors,
+//!   adaptive Dormand–Prince), tolerance 1e-4 as the adaptive gap element.
 //!
 //! Before timing, each case prints its deterministic work counts (mode-steps, right-hand-side
 //! evaluations, Newton iterations, steps) so that ratios of time can be read beside ratios of
@@ -16,7 +18,7 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use structure::testing::paper_scene as paper;
 
 fn bench(c: &mut Criterion) {
-    let cases: [(&str, solvers::Method, Vec<&str>); 4] = [
+    let cases: [(&str, solvers::Method, Vec<&str>); 5] = [
         ("momentum", solvers::Method::Momentum, vec![]),
         (
             "gap/k=1e12/tol=1e-4",
@@ -45,6 +47,11 @@ fn bench(c: &mut Criterion) {
                 "gap_element.integrator=newmark",
                 "gap_element.time_step=1e-3",
             ],
+        ),
+        (
+            "impulse/tol=1e-4",
+            solvers::Method::Impulse,
+            vec!["gap_element.tolerance=1e-4"],
         ),
     ];
     let mut g = c.benchmark_group("paper_scene");

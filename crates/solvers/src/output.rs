@@ -155,7 +155,8 @@ pub struct Stats {
     pub impacts: u64,
     /// Root-finder iterations spent locating events.
     pub root_iterations: u64,
-    /// Located kinks of yielding stories (yield and unloading), adaptive gap element.
+    /// Located kinks of yielding stories (yield and unloading): adaptive gap element and
+    /// impulse method (0 for the momentum method and Newmark, which do not locate them).
     pub story_kinks: u64,
     /// Newton iterations (Newmark).
     pub newton_iterations: u64,
@@ -211,8 +212,9 @@ pub struct History {
     pub velocity: Vec<Vec<f64>>,
     /// Contact forces, N (compressive > 0), one per scene contact. The gap element: the
     /// force of its law. The momentum method: the holding force of a persistent contact
-    /// (constant over each held segment), 0 in free flight; its impacts are impulses
-    /// (finite momentum in zero time), listed in `RunOutput::impacts`, not forces.
+    /// (constant over each held segment), 0 in free flight; the impulse method: the
+    /// instantaneous holding force λ = W⁻¹ δ̈_free of a held contact. Impacts of both are
+    /// impulses (finite momentum in zero time), listed in `RunOutput::impacts`, not forces.
     pub contact_force: Vec<Vec<f64>>,
     /// Story shears, N, one row per sample, stories in the layout of the floors (story j of
     /// a building below its floor j): k_j (u_j − u_{j−1}) for linear stories, the story law's

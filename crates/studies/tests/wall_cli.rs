@@ -55,7 +55,7 @@ fn strip_nulls(v: &mut serde_json::Value) {
 fn a_wall_scene_runs_and_its_resolved_scene_reruns_the_same_analysis() {
     let d = TempDir::new("wall-run");
     let scene = d.write("moat.toml", &scene_text());
-    for method in ["momentum", "gap"] {
+    for method in ["momentum", "gap", "impulse"] {
         let (a, b) = (d.path("a.json"), d.path("b.json"));
         let o = pound(&[
             "run",
