@@ -24,13 +24,13 @@ fn quick_robustness_sweep_counts_agree_with_the_cases() {
     let rows = read_csv(&dir.join("robustness.csv"));
     let h = &rows[0];
     let col = |name: &str| h.iter().position(|x| x == name).unwrap();
-    // Quick: 3 records × 1 gap × 2 c_r × 3 methods, in 6 rows of 3 runs.
-    assert_eq!(rows.len() - 1, 6);
+    // Quick: 3 records × 1 gap × 2 c_r × 4 methods, in 8 rows of 3 runs.
+    assert_eq!(rows.len() - 1, 8);
     let runs: usize = rows[1..]
         .iter()
         .map(|r| r[col("runs")].parse::<usize>().unwrap())
         .sum();
-    assert_eq!(runs, 18);
+    assert_eq!(runs, 24);
     let sum = |c: &str| -> usize {
         rows[1..]
             .iter()
@@ -47,7 +47,7 @@ fn quick_robustness_sweep_counts_agree_with_the_cases() {
         .iter()
         .filter(|c| c["spec"]["params"].get("baseline").is_none())
         .collect();
-    assert_eq!(cases.len(), 18);
+    assert_eq!(cases.len(), 24);
     let failed = cases.iter().filter(|c| c["status"] != "ok").count();
     assert_eq!(sum("failed"), failed);
     let total = |k: &str| -> usize {

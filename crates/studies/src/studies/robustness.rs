@@ -1,6 +1,6 @@
 //! `robustness`: the solvers on every record the project holds (issue 9). Every `*.AT2` in
 //! the definition's `record_dirs` × `gaps` × `restitution` × {momentum method, adaptive gap
-//! element, Newmark}, on the paper scene. Not part of `--all` (a long sweep): `make
+//! element, Newmark, impulse method (default tolerance)}, on the paper scene. Not part of `--all` (a long sweep): `make
 //! robustness`. Outputs `robustness.{md,csv}` (counts per method, c_r and gap) and
 //! `failures.{md,csv}` (every failed run with its error).
 
@@ -28,7 +28,7 @@ struct Def {
     newmark_time_step: f64,
 }
 
-const METHODS: [&str; 3] = ["momentum", "gap adaptive", "gap newmark"];
+const METHODS: [&str; 4] = ["momentum", "gap adaptive", "gap newmark", "impulse"];
 
 /// The records: every `*.AT2` in the folders, sorted by file name within each folder.
 /// With `--quick`: the first three.
@@ -63,10 +63,10 @@ fn grid(ctx: &Ctx, d: &Def) -> (Vec<f64>, Vec<f64>) {
 }
 
 fn case(ctx: &Ctx, d: &Def, rec: &str, method: usize, gap: f64, cr: f64) -> CaseSpec {
-    let m = if method == 0 {
-        Method::Momentum
-    } else {
-        Method::Gap
+    let m = match method {
+        0 => Method::Momentum,
+        3 => Method::Impulse,
+        _ => Method::Gap,
     };
     let mut c = ctx
         .case(&d.scene, m, rec, d.pga)
@@ -75,7 +75,7 @@ fn case(ctx: &Ctx, d: &Def, rec: &str, method: usize, gap: f64, cr: f64) -> Case
         .param("gap_m", gap)
         .param("restitution", cr)
         .param("variant", METHODS[method]);
-    if method > 0 {
+    if method == 1 || method == 2 {
         c = c
             .with("gap_element.law", "kelvin-voigt")
             .with("gap_element.stiffness", format!("{:e}", d.gap_stiffness));
@@ -205,8 +205,8 @@ impl Study for Robustness {
         fails.write(&ctx.dir, "failures")?;
         let reading = vec![
             format!(
-                "{} runs ({} records × {} gaps × {} values of c_r × 3 solvers; every record scaled to {} g): {} failed, {} impacts with a non-positive approach speed, {} achieved restitutions outside [0, 1]; {} contact entries have a null restitution with its reason (touching or grazing contacts, chattering captures, ground-driven gap-element episodes).",
-                totals[0], recs.len(), gaps.len(), crs.len(), d.pga, totals[1], totals[2], totals[3], totals[4]
+                "{} runs ({} records × {} gaps × {} values of c_r × {} solvers; every record scaled to {} g): {} failed, {} impacts with a non-positive approach speed, {} achieved restitutions outside [0, 1]; {} contact entries have a null restitution with its reason (touching or grazing contacts, chattering captures, ground-driven gap-element episodes).",
+                totals[0], recs.len(), gaps.len(), crs.len(), METHODS.len(), d.pga, totals[1], totals[2], totals[3], totals[4]
             ),
             format!(
                 "Largest energy-balance error relative to the input energy: {max_err:.1e}. Wall time of all runs: {wall_all:.1} s summed over cases (cases run in parallel; times vary by tens of per cent between runs on a shared machine)."
