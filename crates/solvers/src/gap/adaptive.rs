@@ -37,9 +37,9 @@ use structure::Scene;
 
 use super::dopri::Dopri5;
 use super::stories::{Kink, Stories};
-use super::{audit, output, Episode, Mode, Segment, System};
+use super::{audit, output, ContactLedger, Episode, Mode, Segment, System};
 use crate::response::ResponseTracker;
-use crate::{History, Impact, RunOutput, SolverError, Stats};
+use crate::{History, RunOutput, SolverError, Stats};
 
 /// Samples per step for the event search.
 const EVENT_SAMPLES: usize = 4;
@@ -208,56 +208,55 @@ pub(crate) fn run_from(
     let mut y = vec![0.0; dim];
     y[..n].copy_from_slice(&sys.u0);
     y[n..2 * n].copy_from_slice(&sys.v0);
-    let mut modes = vec![Mode::default(); nc];
+    let mut ledger = ContactLedger::new(nc, limits.max_impact_rate);
     let mut stories = sys.stories();
-    let mut episodes = vec![Episode::default(); nc];
     let mut caps = vec![f64::INFINITY; nc];
-    let mut impacts: Vec<Impact> = Vec::new();
-    let mut storm = crate::rules::ImpactRateGuard::new(limits.max_impact_rate);
     let mut stats = Stats {
         min_step: f64::INFINITY,
         ..Stats::default()
     };
 
-    let open_episode = |ci: usize,
-                        t: f64,
-                        y: &[f64],
-                        modes: &mut [Mode],
-                        episodes: &mut [Episode],
-                        caps: &mut [f64]| {
+    // Contact `ci` closing at `t` in the state `y`: its approach speed δ̇⁻ and episode (for
+    // the ledger); sets its step cap.
+    let closure = |ci: usize, t: f64, y: &[f64], caps: &mut [f64]| {
         let c = &sys.contacts[ci];
         let d = c.rel(&y[..n]) - c.gap;
         let dd = c.rel(&y[n..2 * n]);
-        modes[ci] = Mode {
-            closed: true,
-            v_close: dd,
-        };
-        episodes[ci] = Episode {
+        caps[ci] = CONTACT_STEP_FRACTION * 2.0 * std::f64::consts::PI / c.law.contact_omega(dd);
+        let episode = Episode {
             t_close: t,
             v_before: dd,
             impulse0: y[imp0 + ci],
             peak_force: c.law.force(d, dd, dd).max(0.0),
             max_pen: d.max(0.0),
         };
-        caps[ci] = CONTACT_STEP_FRACTION * 2.0 * std::f64::consts::PI / c.law.contact_omega(dd);
+        (dd, episode)
     };
 
     for (ci, c) in sys.contacts.iter().enumerate() {
         let d = c.rel(&y[..n]) - c.gap;
         let dd = c.rel(&y[n..2 * n]);
         if c.law.event(d, dd) > 0.0 {
-            open_episode(ci, 0.0, &y, &mut modes, &mut episodes, &mut caps);
+            let (dd, episode) = closure(ci, 0.0, &y, &mut caps);
+            ledger.close(ci, dd, episode);
             stats.impacts += 1;
         }
     }
-    let stored0 = sys.stored(&y, |i| modes[i].closed);
+    let stored0 = sys.stored(&y, |i| ledger.closed(i));
     stories.start(&y[..n], &y[n..2 * n]);
     let initial = sys.mech_energy(&stories, &y[..n], &y[n..2 * n]) + stored0;
 
     let mut tracker = ResponseTracker::new(scene);
     let mut overlaps = crate::overlap::OverlapTracker::new(scene);
     sys.observe_overlaps(&mut overlaps, 0.0, &y[..n]);
-    observe(sys, &stories, &mut tracker, &modes, &y, history.is_some());
+    observe(
+        sys,
+        &stories,
+        &mut tracker,
+        ledger.modes(),
+        &y,
+        history.is_some(),
+    );
     tracker.sample(0.0, history.as_deref_mut());
 
     let n_int = sys.n_intervals(duration);
@@ -272,11 +271,11 @@ pub(crate) fn run_from(
     let mut seg = sys.segment(0);
     let mut t = 0.0f64;
 
-    rhs(sys, &stories, &seg, &modes, t, &y, &mut dp.k[0]);
+    rhs(sys, &stories, &seg, ledger.modes(), t, &y, &mut dp.k[0]);
     stats.rhs_evaluations += 1;
     let mut h = {
-        let mut f =
-            |tt: f64, yy: &[f64], o: &mut [f64]| rhs(sys, &stories, &seg, &modes, tt, yy, o);
+        let modes = ledger.modes();
+        let mut f = |tt: f64, yy: &[f64], o: &mut [f64]| rhs(sys, &stories, &seg, modes, tt, yy, o);
         let cap0 = caps.iter().cloned().fold(f64::INFINITY, f64::min);
         match first_step {
             Some(h0) => h0,
@@ -293,7 +292,7 @@ pub(crate) fn run_from(
         let t_bp = bp(interval);
         let cap = caps
             .iter()
-            .zip(&modes)
+            .zip(ledger.modes())
             .filter(|(_, m)| m.closed)
             .map(|(c, _)| *c)
             .fold(f64::INFINITY, f64::min);
@@ -312,8 +311,9 @@ pub(crate) fn run_from(
             });
         }
         let err = {
+            let modes = ledger.modes();
             let mut f =
-                |tt: f64, yy: &[f64], o: &mut [f64]| rhs(sys, &stories, &seg, &modes, tt, yy, o);
+                |tt: f64, yy: &[f64], o: &mut [f64]| rhs(sys, &stories, &seg, modes, tt, yy, o);
             dp.try_step(&mut f, t, &y, hs)
         };
         stats.rhs_evaluations += 6;
@@ -324,7 +324,7 @@ pub(crate) fn run_from(
             h = hnew;
             let hmin = 1e-14 * (1.0 + t);
             if h < hmin {
-                let closed: Vec<usize> = (0..nc).filter(|&i| modes[i].closed).collect();
+                let closed: Vec<usize> = (0..nc).filter(|&i| ledger.closed(i)).collect();
                 if err.is_nan() {
                     return Err(SolverError::NonFinite {
                         time: t,
@@ -349,7 +349,7 @@ pub(crate) fn run_from(
         // --- event search -------------------------------------------------------------
         let mut event: Option<(f64, usize)> = None;
         for (ci, c) in sys.contacts.iter().enumerate() {
-            let closed = modes[ci].closed;
+            let closed = ledger.closed(ci);
             let law = &c.law;
             let (l, r, gap) = (c.l, (!c.wall).then_some(c.r), c.gap);
             let g_at = |th: f64| {
@@ -426,7 +426,7 @@ pub(crate) fn run_from(
         // --- peaks of closed contacts over the part of the step actually taken -----------
         let th_end = th_cut.unwrap_or(1.0);
         for (ci, c) in sys.contacts.iter().enumerate() {
-            if !modes[ci].closed {
+            if !ledger.closed(ci) {
                 continue;
             }
             let (l, r, gap, law, vc) = (
@@ -434,9 +434,9 @@ pub(crate) fn run_from(
                 (!c.wall).then_some(c.r),
                 c.gap,
                 &c.law,
-                modes[ci].v_close,
+                ledger.v_close(ci),
             );
-            let ep = &mut episodes[ci];
+            let ep = ledger.episode_mut(ci);
             let force_rate = |th: f64| {
                 let (d, dd) = kin(&dp, n, l, r, gap, th);
                 let ddd = dp.dense_rate(n + l, th) - r.map_or(0.0, |r| dp.dense_rate(n + r, th));
@@ -503,9 +503,16 @@ pub(crate) fn run_from(
             t += k.theta * hs;
             stories.commit(&y[..n], &y[n..2 * n], Some(&k));
             stats.story_kinks += 1;
-            rhs(sys, &stories, &seg, &modes, t, &y, &mut dp.k[0]);
+            rhs(sys, &stories, &seg, ledger.modes(), t, &y, &mut dp.k[0]);
             stats.rhs_evaluations += 1;
-            observe(sys, &stories, &mut tracker, &modes, &y, history.is_some());
+            observe(
+                sys,
+                &stories,
+                &mut tracker,
+                ledger.modes(),
+                &y,
+                history.is_some(),
+            );
             tracker.sample(t, history.as_deref_mut());
         } else {
             match event {
@@ -517,21 +524,27 @@ pub(crate) fn run_from(
                         t = t_bp;
                     }
                     let c = &sys.contacts[ci];
-                    if modes[ci].closed {
+                    if ledger.closed(ci) {
                         let dd = c.rel(&y[n..2 * n]);
-                        impacts.push(episodes[ci].impact(ci, t, dd, y[imp0 + ci]));
-                        modes[ci].closed = false;
+                        ledger.open(ci, t, dd, y[imp0 + ci]);
                         caps[ci] = f64::INFINITY;
                     } else {
-                        open_episode(ci, t, &y, &mut modes, &mut episodes, &mut caps);
+                        let (dd, episode) = closure(ci, t, &y, &mut caps);
                         stats.impacts += 1;
-                        storm.record(t, || format!("contact {ci} keeps closing (gap element)"))?;
+                        ledger.close_at(ci, t, dd, episode)?;
                     }
                     stats.events += 1;
                     stories.commit(&y[..n], &y[n..2 * n], None);
-                    rhs(sys, &stories, &seg, &modes, t, &y, &mut dp.k[0]);
+                    rhs(sys, &stories, &seg, ledger.modes(), t, &y, &mut dp.k[0]);
                     stats.rhs_evaluations += 1;
-                    observe(sys, &stories, &mut tracker, &modes, &y, history.is_some());
+                    observe(
+                        sys,
+                        &stories,
+                        &mut tracker,
+                        ledger.modes(),
+                        &y,
+                        history.is_some(),
+                    );
                     if !(land && t == t_bp) {
                         tracker.sample(t, history.as_deref_mut());
                     }
@@ -551,7 +564,14 @@ pub(crate) fn run_from(
         stats.steps += 1;
         h = hnew;
         if land && t == t_bp {
-            observe(sys, &stories, &mut tracker, &modes, &y, history.is_some());
+            observe(
+                sys,
+                &stories,
+                &mut tracker,
+                ledger.modes(),
+                &y,
+                history.is_some(),
+            );
             tracker.sample(t, history.as_deref_mut());
             interval += 1;
             if interval < n_int {
@@ -562,24 +582,19 @@ pub(crate) fn run_from(
                 let jump = (a_new - a_old).abs() > 1e-9 * (a_new.abs() + a_old.abs());
                 seg = next;
                 if jump {
-                    rhs(sys, &stories, &seg, &modes, t, &y, &mut dp.k[0]);
+                    rhs(sys, &stories, &seg, ledger.modes(), t, &y, &mut dp.k[0]);
                     stats.rhs_evaluations += 1;
                 }
             }
         }
     }
 
-    // Episodes still open at the end are reported up to the end of the analysis.
-    for (ci, c) in sys.contacts.iter().enumerate() {
-        if modes[ci].closed {
-            let dd = c.rel(&y[n..2 * n]);
-            impacts.push(episodes[ci].impact(ci, t, dd, y[imp0 + ci]));
-        }
-    }
     if stats.min_step == f64::INFINITY {
         stats.min_step = 0.0;
     }
-    let stored_t = sys.stored(&y, |i| modes[i].closed);
+    let stored_t = sys.stored(&y, |i| ledger.closed(i));
+    // Episodes still open at the end are reported up to the end of the analysis.
+    let impacts = ledger.finish(t, |ci| (sys.contacts[ci].rel(&y[n..2 * n]), y[imp0 + ci]));
     let energy = audit(
         initial,
         y[e_in],

@@ -36,9 +36,9 @@
 use nalgebra::{DMatrix, DVector};
 use structure::Scene;
 
-use super::{audit, output, Episode, System};
+use super::{audit, output, ContactLedger, Episode, System};
 use crate::response::ResponseTracker;
-use crate::{History, Impact, RunOutput, SolverError, Stats};
+use crate::{History, RunOutput, SolverError, Stats};
 
 const MAX_NEWTON: usize = 50;
 /// Largest number of contact-state sets tried in one step (active-set iteration).
@@ -129,13 +129,11 @@ pub(crate) fn run(
     let mut v = sys.v0.clone();
     let mut acc = vec![0.0; n];
     let mut f = vec![0.0; n];
-    let mut v_close = vec![0.0; nc];
-    let mut active = vec![false; nc];
     let mut force = vec![0.0; nc];
     let mut impulse = vec![0.0; nc];
-    let mut episodes = vec![Episode::default(); nc];
-    let mut impacts: Vec<Impact> = Vec::new();
-    let mut storm = crate::rules::ImpactRateGuard::new(scene.limits.max_impact_rate);
+    // Contact modes: closed = carries force at the end of the last step; v_close = δ̇⁻ of
+    // the episode.
+    let mut ledger = ContactLedger::new(nc, scene.limits.max_impact_rate);
     let mut stats = Stats {
         min_step: dt,
         max_step: dt,
@@ -150,22 +148,21 @@ pub(crate) fn run(
     // Initial state and acceleration.
     for ci in 0..nc {
         let (d, dd) = kin(&u, &v, ci);
-        v_close[ci] = dd;
         let (fc, _, _) = sys.contacts[ci].law.state_force(d, dd, dd);
         force[ci] = fc;
-        active[ci] = d > 0.0 && fc != 0.0;
-        if active[ci] {
-            episodes[ci] = Episode {
+        if d > 0.0 && fc != 0.0 {
+            let episode = Episode {
                 t_close: 0.0,
                 v_before: dd,
                 impulse0: 0.0,
                 peak_force: fc,
                 max_pen: d,
             };
+            ledger.close(ci, dd, episode);
             stats.impacts += 1;
         }
     }
-    let stored0 = sys.stored(&u, |i| active[i]);
+    let stored0 = sys.stored(&u, |i| ledger.closed(i));
     stories.start(&u, &v);
     let initial = sys.mech_energy(&stories, &u, &v) + stored0;
     let mut ag = sys.ground_at(0.0);
@@ -216,8 +213,8 @@ pub(crate) fn run(
         let t1 = (step + 1) as f64 * dt;
         let ag1 = sys.ground_at(t1);
         for ci in 0..nc {
-            vc_trial[ci] = if active[ci] {
-                v_close[ci]
+            vc_trial[ci] = if ledger.closed(ci) {
+                ledger.v_close(ci)
             } else {
                 kin(&u, &v, ci).1
             };
@@ -230,7 +227,9 @@ pub(crate) fn run(
         // then the states are checked against the law at the solution and the inconsistent
         // ones flipped, until none is (a frozen set never makes Newton flip-flop across the
         // kink of a clamped law). Starts from the states of the last step.
-        on.copy_from_slice(&active);
+        for (o, m) in on.iter_mut().zip(ledger.modes()) {
+            *o = m.closed;
+        }
         visited.clear();
         force_closed.fill(f64::NAN);
         let mut settled = false;
@@ -443,30 +442,28 @@ pub(crate) fn run(
             e_work += (d1 - d0) * fbar;
             impulse[ci] += dt * fbar;
             let now = f_new[ci] != 0.0;
-            if now && !active[ci] {
+            if now && !ledger.closed(ci) {
                 let (_, dd0) = kin(&u, &v, ci);
-                episodes[ci] = Episode {
+                let episode = Episode {
                     t_close: t1,
                     v_before: dd0,
                     impulse0: impulse[ci] - dt * fbar,
                     peak_force: 0.0,
                     max_pen: 0.0,
                 };
-                v_close[ci] = vc_trial[ci];
                 stats.impacts += 1;
                 stats.events += 1;
-                storm.record(t1, || format!("contact {ci} keeps closing (gap element)"))?;
+                ledger.close_at(ci, t1, vc_trial[ci], episode)?;
             }
             if now {
-                let ep = &mut episodes[ci];
+                let ep = ledger.episode_mut(ci);
                 ep.peak_force = ep.peak_force.max(f_new[ci]);
                 ep.max_pen = ep.max_pen.max(d1);
             }
-            if !now && active[ci] {
-                impacts.push(episodes[ci].impact(ci, t1, dd1, impulse[ci]));
+            if !now && ledger.closed(ci) {
+                ledger.open(ci, t1, dd1, impulse[ci]);
                 stats.events += 1;
             }
-            active[ci] = now;
             force[ci] = f_new[ci];
         }
         u.copy_from_slice(&u_new);
@@ -486,13 +483,8 @@ pub(crate) fn run(
         tracker.sample(t1, history.as_deref_mut());
     }
 
-    for ci in 0..nc {
-        if active[ci] {
-            let (_, dd) = kin(&u, &v, ci);
-            impacts.push(episodes[ci].impact(ci, duration, dd, impulse[ci]));
-        }
-    }
-    let stored_t = sys.stored(&u, |i| active[i]);
+    let stored_t = sys.stored(&u, |i| ledger.closed(i));
+    let impacts = ledger.finish(duration, |ci| (kin(&u, &v, ci).1, impulse[ci]));
     let energy = audit(
         initial,
         e_in,
