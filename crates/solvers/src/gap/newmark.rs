@@ -360,7 +360,7 @@ impl<'a> NewmarkStepper<'a> {
             vc_trial[ci] = if ledger.closed(ci) {
                 ledger.v_close(ci)
             } else {
-                kin(&u, &v, ci).1
+                kin(u, v, ci).1
             };
         }
         for i in 0..n {
@@ -386,7 +386,7 @@ impl<'a> NewmarkStepper<'a> {
                     a_new[i] = a0 * (u_new[i] - u[i] - dt * v[i]) - acc[i];
                     v_new[i] = v[i] + 0.5 * dt * (acc[i] + a_new[i]);
                 }
-                sys.internal(&stories, &u_new, &v_new, f);
+                sys.internal(stories, u_new, v_new, f);
                 if !stories.is_empty() {
                     // Consistent tangents of the iterate (trial from the state committed at
                     // the step start): refactorise the blocks whose yielded set changed.
@@ -407,9 +407,9 @@ impl<'a> NewmarkStepper<'a> {
                             ainv[bi] = if elastic {
                                 ainv_lin[bi].clone()
                             } else {
-                                block_inverse(sys, b, &kt_new, a0, a1, t1)?
+                                block_inverse(sys, b, kt_new, a0, a1, t1)?
                             };
-                            kt_used[bi].clone_from(&kt_new);
+                            kt_used[bi].clone_from(kt_new);
                             changed = true;
                         }
                     }
@@ -419,8 +419,8 @@ impl<'a> NewmarkStepper<'a> {
                             .zip(&sys.blocks)
                             .all(|(k, b)| k[..] == sys.story_k[b.off..b.off + b.len])
                         {
-                            z.clone_from(&z_lin);
-                            wz.clone_from(&wz_lin);
+                            z.clone_from(z_lin);
+                            wz.clone_from(wz_lin);
                         } else {
                             for (ci, c) in sys.contacts.iter().enumerate() {
                                 let zc = &mut z[ci];
@@ -445,7 +445,7 @@ impl<'a> NewmarkStepper<'a> {
                     scale = scale.max(p.abs()).max(ma.abs()).max(f[i].abs());
                 }
                 for (ci, c) in sys.contacts.iter().enumerate() {
-                    let (d, dd) = kin(&u_new, &v_new, ci);
+                    let (d, dd) = kin(u_new, v_new, ci);
                     let (fc, kd, kv) = frozen(c, on[ci], d, dd, vc_trial[ci]);
                     f_new[ci] = fc;
                     alpha[ci] = kd + a1 * kv;
@@ -506,7 +506,7 @@ impl<'a> NewmarkStepper<'a> {
                         v_new[i] = v[i] + 0.5 * dt * (acc[i] + a_new[i]);
                     }
                     for (ci, c) in sys.contacts.iter().enumerate() {
-                        let (d, dd) = kin(&u_new, &v_new, ci);
+                        let (d, dd) = kin(u_new, v_new, ci);
                         f_new[ci] = frozen(c, on[ci], d, dd, vc_trial[ci]).0;
                     }
                     converged = true;
@@ -530,7 +530,7 @@ impl<'a> NewmarkStepper<'a> {
             // fixed-step method.
             let mut flipped = false;
             for (ci, c) in sys.contacts.iter().enumerate() {
-                let (d, dd) = kin(&u_new, &v_new, ci);
+                let (d, dd) = kin(u_new, v_new, ci);
                 let carries = if on[ci] {
                     f_new[ci] > 0.0
                         || (c.law.kind == structure::scene::ContactLaw::KelvinVoigt
@@ -548,7 +548,7 @@ impl<'a> NewmarkStepper<'a> {
                 break 'sets;
             }
             stats.active_set_iterations += 1;
-            if visited.contains(&on) || visited.len() >= MAX_SET_PASSES {
+            if visited.contains(on) || visited.len() >= MAX_SET_PASSES {
                 // No consistent set: a contact opens and closes again inside the step (the
                 // law jumps at δ = 0). Keep closed only the contacts whose force was
                 // compressive when closed, solve once more, and accept: the contact changes
@@ -578,16 +578,16 @@ impl<'a> NewmarkStepper<'a> {
             e_in -= sys.mass[i] * (u_new[i] - u[i]) * agbar;
             vbar[i] = 0.5 * (v[i] + v_new[i]);
         }
-        e_damp += dt * sys.internal(&linear_stories, &zero, &vbar, f);
+        e_damp += dt * sys.internal(linear_stories, zero, vbar, f);
         for ci in 0..nc {
-            let (d0, _) = kin(&u, &v, ci);
-            let (d1, dd1) = kin(&u_new, &v_new, ci);
+            let (d0, _) = kin(u, v, ci);
+            let (d1, dd1) = kin(u_new, v_new, ci);
             let fbar = 0.5 * (force[ci] + f_new[ci]);
             e_work += (d1 - d0) * fbar;
             impulse[ci] += dt * fbar;
             let now = f_new[ci] != 0.0;
             if now && !ledger.closed(ci) {
-                let (_, dd0) = kin(&u, &v, ci);
+                let (_, dd0) = kin(u, v, ci);
                 let episode = Episode {
                     t_close: t1,
                     v_before: dd0,
@@ -610,10 +610,10 @@ impl<'a> NewmarkStepper<'a> {
             }
             force[ci] = f_new[ci];
         }
-        u.copy_from_slice(&u_new);
-        v.copy_from_slice(&v_new);
-        acc.copy_from_slice(&a_new);
-        stories.commit(&u, &v, None);
+        u.copy_from_slice(u_new);
+        v.copy_from_slice(v_new);
+        acc.copy_from_slice(a_new);
+        stories.commit(u, v, None);
         self.ag = ag1;
         stats.steps += 1;
         self.e_in = e_in;
