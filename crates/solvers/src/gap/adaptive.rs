@@ -473,67 +473,7 @@ impl<'a> GapStepper<'a> {
         let dp: &Dopri5 = dp;
 
         // --- event search -------------------------------------------------------------
-        let mut event: Option<(f64, usize)> = None;
-        for (ci, c) in sys.contacts.iter().enumerate() {
-            let closed = ledger.closed(ci);
-            let law = &c.law;
-            let (l, r, gap) = (c.l, (!c.wall).then_some(c.r), c.gap);
-            let g_at = |th: f64| {
-                let (d, dd) = kin(dp, n, l, r, gap, th);
-                law.event(d, dd)
-            };
-            let (_, mut dd_a) = kin(dp, n, l, r, gap, 0.0);
-            let mut th_a = 0.0;
-            let mut bracket: Option<(f64, f64)> = None;
-            for j in 1..=EVENT_SAMPLES {
-                let th_b = j as f64 / EVENT_SAMPLES as f64;
-                if let Some((te, _)) = event {
-                    if th_a >= te {
-                        break;
-                    }
-                }
-                let (d_b, dd_b) = kin(dp, n, l, r, gap, th_b);
-                let g_b = law.event(d_b, dd_b);
-                if !closed {
-                    if g_b > 0.0 {
-                        bracket = Some((th_a, th_b));
-                    } else if dd_a > 0.0 && dd_b < 0.0 {
-                        let tm = locate(
-                            |th| kin(dp, n, l, r, gap, th).1,
-                            th_a,
-                            th_b,
-                            &mut stats.root_iterations,
-                        );
-                        if g_at(tm) > 0.0 {
-                            bracket = Some((th_a, tm));
-                        }
-                    }
-                } else if g_b < 0.0 {
-                    bracket = Some((th_a, th_b));
-                } else if !law.force_event() && dd_a < 0.0 && dd_b > 0.0 {
-                    let tm = locate(
-                        |th| kin(dp, n, l, r, gap, th).1,
-                        th_a,
-                        th_b,
-                        &mut stats.root_iterations,
-                    );
-                    if g_at(tm) < 0.0 {
-                        bracket = Some((th_a, tm));
-                    }
-                }
-                if bracket.is_some() {
-                    break;
-                }
-                th_a = th_b;
-                dd_a = dd_b;
-            }
-            if let Some((a, b)) = bracket {
-                let th = locate(g_at, a, b, &mut stats.root_iterations);
-                if event.map_or(true, |(te, _)| th < te) {
-                    event = Some((th, ci));
-                }
-            }
-        }
+        let event = earliest_event(sys, ledger, dp, &mut stats.root_iterations);
 
         // --- kinks of yielding stories before the earliest contact event ------------------
         let kink: Option<Kink> = if stories.is_empty() {
@@ -550,55 +490,13 @@ impl<'a> GapStepper<'a> {
         let th_cut = kink.map(|k| k.theta).or(event.map(|(th, _)| th));
 
         // --- peaks of closed contacts over the part of the step actually taken -----------
-        let th_end = th_cut.unwrap_or(1.0);
-        for (ci, c) in sys.contacts.iter().enumerate() {
-            if !ledger.closed(ci) {
-                continue;
-            }
-            let (l, r, gap, law, vc) = (
-                c.l,
-                (!c.wall).then_some(c.r),
-                c.gap,
-                &c.law,
-                ledger.v_close(ci),
-            );
-            let ep = ledger.episode_mut(ci);
-            let force_rate = |th: f64| {
-                let (d, dd) = kin(dp, n, l, r, gap, th);
-                let ddd = dp.dense_rate(n + l, th) - r.map_or(0.0, |r| dp.dense_rate(n + r, th));
-                let (kd, kv) = law.tangent(d, dd, vc);
-                kd * dd + kv * ddd
-            };
-            let mut th_a = 0.0;
-            let (_, mut dd_a) = kin(dp, n, l, r, gap, 0.0);
-            let mut fr_a = force_rate(0.0);
-            for j in 1..=EVENT_SAMPLES {
-                let th_b = th_end * j as f64 / EVENT_SAMPLES as f64;
-                let (d_b, dd_b) = kin(dp, n, l, r, gap, th_b);
-                ep.max_pen = ep.max_pen.max(d_b);
-                ep.peak_force = ep.peak_force.max(law.force(d_b, dd_b, vc));
-                if dd_a > 0.0 && dd_b <= 0.0 {
-                    let tm = locate(
-                        |th| kin(dp, n, l, r, gap, th).1,
-                        th_a,
-                        th_b,
-                        &mut stats.root_iterations,
-                    );
-                    let (d, dd) = kin(dp, n, l, r, gap, tm);
-                    ep.max_pen = ep.max_pen.max(d);
-                    ep.peak_force = ep.peak_force.max(law.force(d, dd, vc));
-                }
-                let fr_b = force_rate(th_b);
-                if law.kind != structure::scene::ContactLaw::Linear && fr_a > 0.0 && fr_b <= 0.0 {
-                    let tm = locate(force_rate, th_a, th_b, &mut stats.root_iterations);
-                    let (d, dd) = kin(dp, n, l, r, gap, tm);
-                    ep.peak_force = ep.peak_force.max(law.force(d, dd, vc));
-                }
-                th_a = th_b;
-                dd_a = dd_b;
-                fr_a = fr_b;
-            }
-        }
+        episode_peaks(
+            sys,
+            ledger,
+            dp,
+            th_cut.unwrap_or(1.0),
+            &mut stats.root_iterations,
+        );
 
         let t_old = t;
         // The accepted part of the step, shown to the driver before the state moves on
@@ -735,6 +633,128 @@ impl<'a> GapStepper<'a> {
             (sys.contacts[ci].rel(&y[n..2 * n]), y[imp0 + ci])
         });
         (impacts, energy, stats, self.stories)
+    }
+}
+
+/// The earliest contact event of the accepted step on its dense output: (θ, contact). Each
+/// contact's event function g is sampled at θ = ¼, ½, ¾, 1 (with the interior extremum of δ
+/// checked between samples, so a closure that opens again inside the step is not missed)
+/// and the first sign change located by Brent. `calls` counts the root-finder evaluations.
+fn earliest_event(
+    sys: &System,
+    ledger: &ContactLedger,
+    dp: &Dopri5,
+    calls: &mut u64,
+) -> Option<(f64, usize)> {
+    let n = sys.n;
+    let mut event: Option<(f64, usize)> = None;
+    for (ci, c) in sys.contacts.iter().enumerate() {
+        let closed = ledger.closed(ci);
+        let law = &c.law;
+        let (l, r, gap) = (c.l, (!c.wall).then_some(c.r), c.gap);
+        let g_at = |th: f64| {
+            let (d, dd) = kin(dp, n, l, r, gap, th);
+            law.event(d, dd)
+        };
+        let (_, mut dd_a) = kin(dp, n, l, r, gap, 0.0);
+        let mut th_a = 0.0;
+        let mut bracket: Option<(f64, f64)> = None;
+        for j in 1..=EVENT_SAMPLES {
+            let th_b = j as f64 / EVENT_SAMPLES as f64;
+            if let Some((te, _)) = event {
+                if th_a >= te {
+                    break;
+                }
+            }
+            let (d_b, dd_b) = kin(dp, n, l, r, gap, th_b);
+            let g_b = law.event(d_b, dd_b);
+            if !closed {
+                if g_b > 0.0 {
+                    bracket = Some((th_a, th_b));
+                } else if dd_a > 0.0 && dd_b < 0.0 {
+                    let tm = locate(|th| kin(dp, n, l, r, gap, th).1, th_a, th_b, calls);
+                    if g_at(tm) > 0.0 {
+                        bracket = Some((th_a, tm));
+                    }
+                }
+            } else if g_b < 0.0 {
+                bracket = Some((th_a, th_b));
+            } else if !law.force_event() && dd_a < 0.0 && dd_b > 0.0 {
+                let tm = locate(|th| kin(dp, n, l, r, gap, th).1, th_a, th_b, calls);
+                if g_at(tm) < 0.0 {
+                    bracket = Some((th_a, tm));
+                }
+            }
+            if bracket.is_some() {
+                break;
+            }
+            th_a = th_b;
+            dd_a = dd_b;
+        }
+        if let Some((a, b)) = bracket {
+            let th = locate(g_at, a, b, calls);
+            if event.map_or(true, |(te, _)| th < te) {
+                event = Some((th, ci));
+            }
+        }
+    }
+
+    event
+}
+
+/// Raises the peaks (penetration δ, force) of the closed contacts' episodes over θ ∈ [0,
+/// `th_end`] of the accepted step: at the samples and at the located roots of δ̇ and of
+/// dF/dt = F_δ δ̇ + F_δ̇ δ̈ on the dense output.
+fn episode_peaks(
+    sys: &System,
+    ledger: &mut ContactLedger,
+    dp: &Dopri5,
+    th_end: f64,
+    calls: &mut u64,
+) {
+    let n = sys.n;
+    for (ci, c) in sys.contacts.iter().enumerate() {
+        if !ledger.closed(ci) {
+            continue;
+        }
+        let (l, r, gap, law, vc) = (
+            c.l,
+            (!c.wall).then_some(c.r),
+            c.gap,
+            &c.law,
+            ledger.v_close(ci),
+        );
+        let ep = ledger.episode_mut(ci);
+        let force_rate = |th: f64| {
+            let (d, dd) = kin(dp, n, l, r, gap, th);
+            let ddd = dp.dense_rate(n + l, th) - r.map_or(0.0, |r| dp.dense_rate(n + r, th));
+            let (kd, kv) = law.tangent(d, dd, vc);
+            kd * dd + kv * ddd
+        };
+        let mut th_a = 0.0;
+        let (_, mut dd_a) = kin(dp, n, l, r, gap, 0.0);
+        let mut fr_a = force_rate(0.0);
+        for j in 1..=EVENT_SAMPLES {
+            let th_b = th_end * j as f64 / EVENT_SAMPLES as f64;
+            let (d_b, dd_b) = kin(dp, n, l, r, gap, th_b);
+            ep.max_pen = ep.max_pen.max(d_b);
+            ep.peak_force = ep.peak_force.max(law.force(d_b, dd_b, vc));
+            if dd_a > 0.0 && dd_b <= 0.0 {
+                let tm = locate(|th| kin(dp, n, l, r, gap, th).1, th_a, th_b, calls);
+                let (d, dd) = kin(dp, n, l, r, gap, tm);
+                ep.max_pen = ep.max_pen.max(d);
+                ep.peak_force = ep.peak_force.max(law.force(d, dd, vc));
+            }
+            let fr_b = force_rate(th_b);
+            if law.kind != structure::scene::ContactLaw::Linear && fr_a > 0.0 && fr_b <= 0.0 {
+                let tm = locate(force_rate, th_a, th_b, calls);
+                let (d, dd) = kin(dp, n, l, r, gap, tm);
+                ep.peak_force = ep.peak_force.max(law.force(d, dd, vc));
+            }
+            th_a = th_b;
+            dd_a = dd_b;
+            fr_a = fr_b;
+        }
     }
 }
 
