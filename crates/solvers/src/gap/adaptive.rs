@@ -6,11 +6,11 @@
 //! the integrated motion. Tolerances: rtol = `gap_element.tolerance`, atol = rtol·1e-3 m on
 //! displacements and rtol·1e-3 m/s on velocities.
 //!
-//! Shape: [`GapStepper::step`] advances by one trial step and reports a [`StepOutcome`]
+//! Shape: `GapStepper::step` advances by one trial step and reports a `StepOutcome`
 //! (rejected, accepted, record point reached, contact closed or opened, story kink); the
-//! driver [`run_from`] owns the loop over the record intervals, the response tracker (peaks,
+//! driver `run_from` owns the loop over the record intervals, the response tracker (peaks,
 //! samples, history) and the overlap audit. The contact books (modes, episodes, impacts,
-//! impact-rate guard) are the [`super::ledger::ContactLedger`] shared with Newmark.
+//! impact-rate guard) are the `ledger::ContactLedger` shared with Newmark.
 //!
 //! Step loop:
 //! 1. The step is cut to the next record point (t = i·dt), so the ground acceleration is one
