@@ -314,8 +314,7 @@ impl<'a> NewmarkStepper<'a> {
         let sys = self.sys;
         let n = sys.n;
         let nc = sys.contacts.len();
-        let (dt, a0, a1, step, ag) = (self.dt, self.a0, self.a1, self.step, self.ag);
-        let (mut e_in, mut e_damp, mut e_work) = (self.e_in, self.e_damp, self.e_work);
+        let (dt, a0, a1, step) = (self.dt, self.a0, self.a1, self.step);
         let kin = |u: &[f64], v: &[f64], ci: usize| {
             let c = &sys.contacts[ci];
             (c.rel(u) - c.gap, c.rel(v))
@@ -328,7 +327,6 @@ impl<'a> NewmarkStepper<'a> {
             z_lin,
             wz_lin,
             stories,
-            linear_stories,
             kt_used,
             kt_new,
             tmp,
@@ -336,16 +334,12 @@ impl<'a> NewmarkStepper<'a> {
             v,
             acc,
             f,
-            force,
-            impulse,
             ledger,
             stats,
             u_new,
             v_new,
             a_new,
             res,
-            vbar,
-            zero,
             f_new,
             alpha,
             vc_trial,
@@ -572,6 +566,44 @@ impl<'a> NewmarkStepper<'a> {
             });
         }
 
+        self.accept(t1, ag1)?;
+        self.step += 1;
+        Ok(t1)
+    }
+
+    /// Books a converged step ending at `t1` (s; ground acceleration `ag1`, m/s²): the
+    /// energy sums (trapezoidal), the contact impulses and the ledger (closures, episode
+    /// peaks, openings); then the state and the committed stories move on.
+    fn accept(&mut self, t1: f64, ag1: f64) -> Result<(), SolverError> {
+        let sys = self.sys;
+        let n = sys.n;
+        let nc = sys.contacts.len();
+        let (dt, ag) = (self.dt, self.ag);
+        let (mut e_in, mut e_damp, mut e_work) = (self.e_in, self.e_damp, self.e_work);
+        let kin = |u: &[f64], v: &[f64], ci: usize| {
+            let c = &sys.contacts[ci];
+            (c.rel(u) - c.gap, c.rel(v))
+        };
+        let NewmarkStepper {
+            stories,
+            linear_stories,
+            u,
+            v,
+            acc,
+            f,
+            force,
+            impulse,
+            ledger,
+            stats,
+            u_new,
+            v_new,
+            a_new,
+            vbar,
+            zero,
+            f_new,
+            vc_trial,
+            ..
+        } = self;
         // Energy (trapezoidal sums).
         let agbar = 0.5 * (ag + ag1);
         for i in 0..n {
@@ -619,8 +651,7 @@ impl<'a> NewmarkStepper<'a> {
         self.e_in = e_in;
         self.e_damp = e_damp;
         self.e_work = e_work;
-        self.step += 1;
-        Ok(t1)
+        Ok(())
     }
 
     /// Ends the run at `t_end` (s): the impacts (episodes still open reported up to the
