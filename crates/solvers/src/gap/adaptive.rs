@@ -6,6 +6,12 @@
 //! the integrated motion. Tolerances: rtol = `gap_element.tolerance`, atol = rtol·1e-3 m on
 //! displacements and rtol·1e-3 m/s on velocities.
 //!
+//! Shape: `GapStepper::step` advances by one trial step and reports a `StepOutcome`
+//! (rejected, accepted, record point reached, contact closed or opened, story kink); the
+//! driver `run_from` owns the loop over the record intervals, the response tracker (peaks,
+//! samples, history) and the overlap audit. The contact books (modes, episodes, impacts,
+//! impact-rate guard) are the `ledger::ContactLedger` shared with Newmark.
+//!
 //! Step loop:
 //! 1. The step is cut to the next record point (t = i·dt), so the ground acceleration is one
 //!    linear piece inside every step, and while a contact is closed to 1/8 of its contact
@@ -37,7 +43,8 @@ use structure::Scene;
 
 use super::dopri::Dopri5;
 use super::stories::{Kink, Stories};
-use super::{audit, output, Episode, Mode, Segment, System};
+use super::{audit, output, ContactLedger, Episode, Mode, Segment, System};
+use crate::output::EnergyAudit;
 use crate::response::ResponseTracker;
 use crate::{History, Impact, RunOutput, SolverError, Stats};
 
@@ -188,143 +195,261 @@ pub(crate) fn run(
     run_from(scene, sys, history, None)
 }
 
-/// [`run`] with the first trial step `first_step` (s) instead of Hairer's starting step when
-/// given (for tests of the step control, e.g. a first step rejected on purpose).
-pub(crate) fn run_from(
-    scene: &Scene,
-    sys: &System,
-    mut history: Option<&mut History>,
-    first_step: Option<f64>,
-) -> Result<RunOutput, SolverError> {
-    let n = sys.n;
-    let nc = sys.contacts.len();
-    let dim = 2 * n + 3 + nc;
-    let (e_in, e_damp, e_work, imp0) = (2 * n, 2 * n + 1, 2 * n + 2, 2 * n + 3);
-    let tol = scene.gap_element.tolerance;
-    let mut dp = Dopri5::new(dim, 2 * n, tol, vec![tol * 1e-3; 2 * n]);
-    let duration = scene.duration;
-    let limits = &scene.limits;
+/// What one call of [`GapStepper::step`] did. `breakpoint`: the step ended on the record
+/// point it was given.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum StepOutcome {
+    /// The trial step failed the error test: nothing moved, the next try is shorter.
+    Rejected,
+    /// The whole step was taken, ending inside the record interval.
+    Accepted,
+    /// The whole step was taken and ended on the record point.
+    Breakpoint,
+    /// The step was cut at (or ended with) the closure of contact `contact`.
+    ContactClosed { contact: usize, breakpoint: bool },
+    /// The step was cut at (or ended with) the opening of contact `contact`.
+    ContactOpened { contact: usize, breakpoint: bool },
+    /// The step was cut at a story kink (yield or unloading) before any contact event; the
+    /// stories were committed there.
+    StoryKink { breakpoint: bool },
+}
 
-    let mut y = vec![0.0; dim];
-    y[..n].copy_from_slice(&sys.u0);
-    y[n..2 * n].copy_from_slice(&sys.v0);
-    let mut modes = vec![Mode::default(); nc];
-    let mut stories = sys.stories();
-    let mut episodes = vec![Episode::default(); nc];
-    let mut caps = vec![f64::INFINITY; nc];
-    let mut impacts: Vec<Impact> = Vec::new();
-    let mut storm = crate::rules::ImpactRateGuard::new(limits.max_impact_rate);
-    let mut stats = Stats {
-        min_step: f64::INFINITY,
-        ..Stats::default()
-    };
-
-    let open_episode = |ci: usize,
-                        t: f64,
-                        y: &[f64],
-                        modes: &mut [Mode],
-                        episodes: &mut [Episode],
-                        caps: &mut [f64]| {
-        let c = &sys.contacts[ci];
-        let d = c.rel(&y[..n]) - c.gap;
-        let dd = c.rel(&y[n..2 * n]);
-        modes[ci] = Mode {
-            closed: true,
-            v_close: dd,
-        };
-        episodes[ci] = Episode {
-            t_close: t,
-            v_before: dd,
-            impulse0: y[imp0 + ci],
-            peak_force: c.law.force(d, dd, dd).max(0.0),
-            max_pen: d.max(0.0),
-        };
-        caps[ci] = CONTACT_STEP_FRACTION * 2.0 * std::f64::consts::PI / c.law.contact_omega(dd);
-    };
-
-    for (ci, c) in sys.contacts.iter().enumerate() {
-        let d = c.rel(&y[..n]) - c.gap;
-        let dd = c.rel(&y[n..2 * n]);
-        if c.law.event(d, dd) > 0.0 {
-            open_episode(ci, 0.0, &y, &mut modes, &mut episodes, &mut caps);
-            stats.impacts += 1;
+impl StepOutcome {
+    /// Whether the step ended on the record point.
+    pub fn at_breakpoint(self) -> bool {
+        match self {
+            StepOutcome::Rejected | StepOutcome::Accepted => false,
+            StepOutcome::Breakpoint => true,
+            StepOutcome::ContactClosed { breakpoint, .. }
+            | StepOutcome::ContactOpened { breakpoint, .. }
+            | StepOutcome::StoryKink { breakpoint } => breakpoint,
         }
     }
-    let stored0 = sys.stored(&y, |i| modes[i].closed);
-    stories.start(&y[..n], &y[n..2 * n]);
-    let initial = sys.mech_energy(&stories, &y[..n], &y[n..2 * n]) + stored0;
+}
 
-    let mut tracker = ResponseTracker::new(scene);
-    let mut overlaps = crate::overlap::OverlapTracker::new(scene);
-    sys.observe_overlaps(&mut overlaps, 0.0, &y[..n]);
-    observe(sys, &stories, &mut tracker, &modes, &y, history.is_some());
-    tracker.sample(0.0, history.as_deref_mut());
+/// The accepted part of a step, shown to the driver before the state moves on (continuous
+/// peaks, overlap audit).
+pub(crate) struct DenseStep<'a> {
+    /// The step's dense output.
+    pub dp: &'a Dopri5,
+    /// Story state committed at the step start.
+    pub stories: &'a Stories,
+    /// Start of the step, s.
+    pub t: f64,
+    /// State at the step start.
+    pub y0: &'a [f64],
+    /// State at θ = `th_end`.
+    pub y1: &'a [f64],
+    /// Fraction of the step taken, (0, 1].
+    pub th_end: f64,
+}
 
-    let n_int = sys.n_intervals(duration);
-    let bp = |i: usize| {
-        if i + 1 >= n_int {
-            duration
-        } else {
-            (i + 1) as f64 * sys.sample_dt
-        }
+/// The adaptive gap-element integrator between two calls of [`GapStepper::step`]: the
+/// Dormand–Prince state (y, t, next step h, FSAL stage), the record piece of the ground
+/// motion, the contact ledger with the step caps of the closed contacts, the committed
+/// story state and the statistics. It knows nothing of peaks, histories or record points
+/// other than the one it is told to stop at.
+pub(crate) struct GapStepper<'a> {
+    sys: &'a System,
+    dp: Dopri5,
+    y: Vec<f64>,
+    t: f64,
+    h: f64,
+    seg: Segment,
+    ledger: ContactLedger,
+    stories: Stories,
+    /// Step cap of each closed contact (1/8 of its contact period), s; ∞ when open.
+    caps: Vec<f64>,
+    stats: Stats,
+    rejected_before: bool,
+    total_steps: u64,
+    max_steps: u64,
+    scratch: Vec<f64>,
+    y_end: Vec<f64>,
+    /// Initial energy (mechanical + stored in closed contacts), J.
+    initial: f64,
+    /// Energy stored in the contacts closed at t = 0, J.
+    stored0: f64,
+}
+
+/// Contact `ci` closing at `t` in the state `y`: its approach speed δ̇⁻ and episode (for the
+/// ledger); sets its step cap.
+fn closing(sys: &System, ci: usize, t: f64, y: &[f64], caps: &mut [f64]) -> (f64, Episode) {
+    let n = sys.n;
+    let c = &sys.contacts[ci];
+    let d = c.rel(&y[..n]) - c.gap;
+    let dd = c.rel(&y[n..2 * n]);
+    caps[ci] = CONTACT_STEP_FRACTION * 2.0 * std::f64::consts::PI / c.law.contact_omega(dd);
+    let episode = Episode {
+        t_close: t,
+        v_before: dd,
+        impulse0: y[2 * n + 3 + ci],
+        peak_force: c.law.force(d, dd, dd).max(0.0),
+        max_pen: d.max(0.0),
     };
-    let mut interval = 0usize;
-    let mut seg = sys.segment(0);
-    let mut t = 0.0f64;
+    (dd, episode)
+}
 
-    rhs(sys, &stories, &seg, &modes, t, &y, &mut dp.k[0]);
-    stats.rhs_evaluations += 1;
-    let mut h = {
-        let mut f =
-            |tt: f64, yy: &[f64], o: &mut [f64]| rhs(sys, &stories, &seg, &modes, tt, yy, o);
-        let cap0 = caps.iter().cloned().fold(f64::INFINITY, f64::min);
-        match first_step {
-            Some(h0) => h0,
-            None => dp.initial_step(&mut f, t, &y.clone(), (bp(0) - t).min(cap0)),
+impl<'a> GapStepper<'a> {
+    /// The initial state of `sys` (contacts already closed at t = 0 open their episodes),
+    /// the first stage and the first trial step: `first_step` (s) when given, otherwise
+    /// Hairer's starting step, at most up to the first record point `t_bp` (s).
+    fn new(scene: &Scene, sys: &'a System, first_step: Option<f64>, t_bp: f64) -> Self {
+        let n = sys.n;
+        let nc = sys.contacts.len();
+        let dim = 2 * n + 3 + nc;
+        let tol = scene.gap_element.tolerance;
+        let mut dp = Dopri5::new(dim, 2 * n, tol, vec![tol * 1e-3; 2 * n]);
+        let limits = &scene.limits;
+
+        let mut y = vec![0.0; dim];
+        y[..n].copy_from_slice(&sys.u0);
+        y[n..2 * n].copy_from_slice(&sys.v0);
+        let mut ledger = ContactLedger::new(nc, limits.max_impact_rate);
+        let mut stories = sys.stories();
+        let mut caps = vec![f64::INFINITY; nc];
+        let mut stats = Stats {
+            min_step: f64::INFINITY,
+            ..Stats::default()
+        };
+        for (ci, c) in sys.contacts.iter().enumerate() {
+            let d = c.rel(&y[..n]) - c.gap;
+            let dd = c.rel(&y[n..2 * n]);
+            if c.law.event(d, dd) > 0.0 {
+                let (dd, episode) = closing(sys, ci, 0.0, &y, &mut caps);
+                ledger.close(ci, dd, episode);
+                stats.impacts += 1;
+            }
         }
-    };
-    stats.rhs_evaluations += 1;
-    let mut rejected_before = false;
-    let mut total_steps: u64 = 0;
-    let mut scratch = vec![0.0; dim];
-    let mut y_end = vec![0.0; dim];
+        let stored0 = sys.stored(&y, |i| ledger.closed(i));
+        stories.start(&y[..n], &y[n..2 * n]);
+        let initial = sys.mech_energy(&stories, &y[..n], &y[n..2 * n]) + stored0;
 
-    while interval < n_int {
-        let t_bp = bp(interval);
+        let seg = sys.segment(0);
+        let t = 0.0f64;
+        rhs(sys, &stories, &seg, ledger.modes(), t, &y, &mut dp.k[0]);
+        stats.rhs_evaluations += 1;
+        let h = {
+            let modes = ledger.modes();
+            let mut f =
+                |tt: f64, yy: &[f64], o: &mut [f64]| rhs(sys, &stories, &seg, modes, tt, yy, o);
+            let cap0 = caps.iter().cloned().fold(f64::INFINITY, f64::min);
+            match first_step {
+                Some(h0) => h0,
+                None => dp.initial_step(&mut f, t, &y.clone(), (t_bp - t).min(cap0)),
+            }
+        };
+        stats.rhs_evaluations += 1;
+        GapStepper {
+            sys,
+            dp,
+            y,
+            t,
+            h,
+            seg,
+            ledger,
+            stories,
+            caps,
+            stats,
+            rejected_before: false,
+            total_steps: 0,
+            max_steps: limits.max_steps,
+            scratch: vec![0.0; dim],
+            y_end: vec![0.0; dim],
+            initial,
+            stored0,
+        }
+    }
+
+    /// Time, s.
+    pub fn t(&self) -> f64 {
+        self.t
+    }
+
+    /// Floor displacements, m.
+    pub fn u(&self) -> &[f64] {
+        &self.y[..self.sys.n]
+    }
+
+    /// Observes the current state for peaks and, when a history is kept, for its next
+    /// sample.
+    fn observe(&self, tracker: &mut ResponseTracker, history: bool) {
+        observe(
+            self.sys,
+            &self.stories,
+            tracker,
+            self.ledger.modes(),
+            &self.y,
+            history,
+        );
+    }
+
+    /// One trial step of at most the next step size, cut to the closed contacts' caps and
+    /// landing on the record point `t_bp` (s) when within 1 %. When accepted, the contact
+    /// events and story kinks are located and the step is cut at the earliest one;
+    /// `on_dense` sees the part taken before the state moves on; the contact or the stories
+    /// change state there and the FSAL stage restarts. Errors: step budget, step-size
+    /// underflow or a non-finite trial state, the impact-rate guard.
+    fn step(
+        &mut self,
+        t_bp: f64,
+        on_dense: &mut dyn FnMut(&DenseStep),
+    ) -> Result<StepOutcome, SolverError> {
+        let sys = self.sys;
+        let n = sys.n;
+        let nc = sys.contacts.len();
+        let imp0 = 2 * n + 3;
+        let GapStepper {
+            dp,
+            y,
+            ledger,
+            stories,
+            caps,
+            stats,
+            seg,
+            scratch,
+            y_end,
+            ..
+        } = self;
+        let mut t = self.t;
         let cap = caps
             .iter()
-            .zip(&modes)
+            .zip(ledger.modes())
             .filter(|(_, m)| m.closed)
             .map(|(c, _)| *c)
             .fold(f64::INFINITY, f64::min);
-        let mut hs = h.min(cap);
+        let mut hs = self.h.min(cap);
         let mut land = false;
         if t + 1.01 * hs >= t_bp {
             hs = t_bp - t;
             land = true;
         }
-        total_steps += 1;
-        if total_steps > limits.max_steps {
+        self.total_steps += 1;
+        if self.total_steps > self.max_steps {
             return Err(SolverError::StepBudget {
                 time: t,
-                steps: total_steps - 1,
-                limit: limits.max_steps,
+                steps: self.total_steps - 1,
+                limit: self.max_steps,
             });
         }
         let err = {
+            let modes = ledger.modes();
+            let stories: &Stories = stories;
+            let seg: &Segment = seg;
             let mut f =
-                |tt: f64, yy: &[f64], o: &mut [f64]| rhs(sys, &stories, &seg, &modes, tt, yy, o);
-            dp.try_step(&mut f, t, &y, hs)
+                |tt: f64, yy: &[f64], o: &mut [f64]| rhs(sys, stories, seg, modes, tt, yy, o);
+            dp.try_step(&mut f, t, y, hs)
         };
         stats.rhs_evaluations += 6;
-        let (ok, hnew) = dp.control(err, hs, rejected_before);
+        let (ok, hnew) = dp.control(err, hs, self.rejected_before);
         if !ok {
             stats.rejected_steps += 1;
-            rejected_before = true;
-            h = hnew;
+            self.rejected_before = true;
+            self.h = hnew;
+            let h = hnew;
             let hmin = 1e-14 * (1.0 + t);
             if h < hmin {
-                let closed: Vec<usize> = (0..nc).filter(|&i| modes[i].closed).collect();
+                let closed: Vec<usize> = (0..nc).filter(|&i| ledger.closed(i)).collect();
                 if err.is_nan() {
                     return Err(SolverError::NonFinite {
                         time: t,
@@ -341,80 +466,21 @@ pub(crate) fn run_from(
                     ),
                 });
             }
-            continue;
+            return Ok(StepOutcome::Rejected);
         }
-        rejected_before = false;
-        dp.prepare_dense(t, &y, hs);
+        self.rejected_before = false;
+        dp.prepare_dense(t, y, hs);
+        let dp: &Dopri5 = dp;
 
         // --- event search -------------------------------------------------------------
-        let mut event: Option<(f64, usize)> = None;
-        for (ci, c) in sys.contacts.iter().enumerate() {
-            let closed = modes[ci].closed;
-            let law = &c.law;
-            let (l, r, gap) = (c.l, (!c.wall).then_some(c.r), c.gap);
-            let g_at = |th: f64| {
-                let (d, dd) = kin(&dp, n, l, r, gap, th);
-                law.event(d, dd)
-            };
-            let (_, mut dd_a) = kin(&dp, n, l, r, gap, 0.0);
-            let mut th_a = 0.0;
-            let mut bracket: Option<(f64, f64)> = None;
-            for j in 1..=EVENT_SAMPLES {
-                let th_b = j as f64 / EVENT_SAMPLES as f64;
-                if let Some((te, _)) = event {
-                    if th_a >= te {
-                        break;
-                    }
-                }
-                let (d_b, dd_b) = kin(&dp, n, l, r, gap, th_b);
-                let g_b = law.event(d_b, dd_b);
-                if !closed {
-                    if g_b > 0.0 {
-                        bracket = Some((th_a, th_b));
-                    } else if dd_a > 0.0 && dd_b < 0.0 {
-                        let tm = locate(
-                            |th| kin(&dp, n, l, r, gap, th).1,
-                            th_a,
-                            th_b,
-                            &mut stats.root_iterations,
-                        );
-                        if g_at(tm) > 0.0 {
-                            bracket = Some((th_a, tm));
-                        }
-                    }
-                } else if g_b < 0.0 {
-                    bracket = Some((th_a, th_b));
-                } else if !law.force_event() && dd_a < 0.0 && dd_b > 0.0 {
-                    let tm = locate(
-                        |th| kin(&dp, n, l, r, gap, th).1,
-                        th_a,
-                        th_b,
-                        &mut stats.root_iterations,
-                    );
-                    if g_at(tm) < 0.0 {
-                        bracket = Some((th_a, tm));
-                    }
-                }
-                if bracket.is_some() {
-                    break;
-                }
-                th_a = th_b;
-                dd_a = dd_b;
-            }
-            if let Some((a, b)) = bracket {
-                let th = locate(g_at, a, b, &mut stats.root_iterations);
-                if event.map_or(true, |(te, _)| th < te) {
-                    event = Some((th, ci));
-                }
-            }
-        }
+        let event = earliest_event(sys, ledger, dp, &mut stats.root_iterations);
 
         // --- kinks of yielding stories before the earliest contact event ------------------
         let kink: Option<Kink> = if stories.is_empty() {
             None
         } else {
             stories.locate_kink(
-                &dp,
+                dp,
                 0,
                 n,
                 event.map_or(1.0, |(th, _)| th),
@@ -424,122 +490,86 @@ pub(crate) fn run_from(
         let th_cut = kink.map(|k| k.theta).or(event.map(|(th, _)| th));
 
         // --- peaks of closed contacts over the part of the step actually taken -----------
-        let th_end = th_cut.unwrap_or(1.0);
-        for (ci, c) in sys.contacts.iter().enumerate() {
-            if !modes[ci].closed {
-                continue;
-            }
-            let (l, r, gap, law, vc) = (
-                c.l,
-                (!c.wall).then_some(c.r),
-                c.gap,
-                &c.law,
-                modes[ci].v_close,
-            );
-            let ep = &mut episodes[ci];
-            let force_rate = |th: f64| {
-                let (d, dd) = kin(&dp, n, l, r, gap, th);
-                let ddd = dp.dense_rate(n + l, th) - r.map_or(0.0, |r| dp.dense_rate(n + r, th));
-                let (kd, kv) = law.tangent(d, dd, vc);
-                kd * dd + kv * ddd
-            };
-            let mut th_a = 0.0;
-            let (_, mut dd_a) = kin(&dp, n, l, r, gap, 0.0);
-            let mut fr_a = force_rate(0.0);
-            for j in 1..=EVENT_SAMPLES {
-                let th_b = th_end * j as f64 / EVENT_SAMPLES as f64;
-                let (d_b, dd_b) = kin(&dp, n, l, r, gap, th_b);
-                ep.max_pen = ep.max_pen.max(d_b);
-                ep.peak_force = ep.peak_force.max(law.force(d_b, dd_b, vc));
-                if dd_a > 0.0 && dd_b <= 0.0 {
-                    let tm = locate(
-                        |th| kin(&dp, n, l, r, gap, th).1,
-                        th_a,
-                        th_b,
-                        &mut stats.root_iterations,
-                    );
-                    let (d, dd) = kin(&dp, n, l, r, gap, tm);
-                    ep.max_pen = ep.max_pen.max(d);
-                    ep.peak_force = ep.peak_force.max(law.force(d, dd, vc));
-                }
-                let fr_b = force_rate(th_b);
-                if law.kind != structure::scene::ContactLaw::Linear && fr_a > 0.0 && fr_b <= 0.0 {
-                    let tm = locate(force_rate, th_a, th_b, &mut stats.root_iterations);
-                    let (d, dd) = kin(&dp, n, l, r, gap, tm);
-                    ep.peak_force = ep.peak_force.max(law.force(d, dd, vc));
-                }
-                th_a = th_b;
-                dd_a = dd_b;
-                fr_a = fr_b;
-            }
-        }
+        episode_peaks(
+            sys,
+            ledger,
+            dp,
+            th_cut.unwrap_or(1.0),
+            &mut stats.root_iterations,
+        );
 
         let t_old = t;
-        // Continuous peaks over the accepted part of the step, from the dense output
-        // (before the state moves on: the step's start state is still in `y`).
+        // The accepted part of the step, shown to the driver before the state moves on
+        // (the step's start state is still in `y`).
         let th_end = th_cut.map_or(1.0, |th| th.min(1.0));
         if th_end < 1.0 {
-            dp.dense_all(th_end, &mut y_end);
+            dp.dense_all(th_end, y_end);
         } else {
             y_end.copy_from_slice(&dp.y1);
         }
-        dense_peaks(
-            sys,
-            &stories,
-            &dp,
-            &y,
-            &y_end,
+        on_dense(&DenseStep {
+            dp,
+            stories,
+            t,
+            y0: y,
+            y1: y_end,
             th_end,
-            &mut tracker,
-            &mut scratch,
-        );
-        if !overlaps.is_empty() {
-            dense_overlaps(sys, &dp, t, &y, &y_end, th_end, &mut overlaps);
-        }
+        });
+        let outcome;
         if let Some(k) = kink {
             // A story kink before any contact event: cut the step there and commit.
-            dp.dense_all(k.theta, &mut scratch);
-            y.copy_from_slice(&scratch);
+            dp.dense_all(k.theta, scratch);
+            y.copy_from_slice(scratch);
             t += k.theta * hs;
             stories.commit(&y[..n], &y[n..2 * n], Some(&k));
             stats.story_kinks += 1;
-            rhs(sys, &stories, &seg, &modes, t, &y, &mut dp.k[0]);
+            rhs(sys, stories, seg, ledger.modes(), t, y, &mut self.dp.k[0]);
             stats.rhs_evaluations += 1;
-            observe(sys, &stories, &mut tracker, &modes, &y, history.is_some());
-            tracker.sample(t, history.as_deref_mut());
+            outcome = StepOutcome::StoryKink {
+                breakpoint: land && t == t_bp,
+            };
         } else {
             match event {
                 Some((th, ci)) => {
-                    dp.dense_all(th, &mut scratch);
-                    y.copy_from_slice(&scratch);
+                    dp.dense_all(th, scratch);
+                    y.copy_from_slice(scratch);
                     t = if th >= 1.0 { t + hs } else { t + th * hs };
                     if land && th >= 1.0 {
                         t = t_bp;
                     }
+                    let breakpoint = land && t == t_bp;
                     let c = &sys.contacts[ci];
-                    if modes[ci].closed {
+                    if ledger.closed(ci) {
                         let dd = c.rel(&y[n..2 * n]);
-                        impacts.push(episodes[ci].impact(ci, t, dd, y[imp0 + ci]));
-                        modes[ci].closed = false;
+                        ledger.open(ci, t, dd, y[imp0 + ci]);
                         caps[ci] = f64::INFINITY;
+                        outcome = StepOutcome::ContactOpened {
+                            contact: ci,
+                            breakpoint,
+                        };
                     } else {
-                        open_episode(ci, t, &y, &mut modes, &mut episodes, &mut caps);
+                        let (dd, episode) = closing(sys, ci, t, y, caps);
                         stats.impacts += 1;
-                        storm.record(t, || format!("contact {ci} keeps closing (gap element)"))?;
+                        ledger.close_at(ci, t, dd, episode)?;
+                        outcome = StepOutcome::ContactClosed {
+                            contact: ci,
+                            breakpoint,
+                        };
                     }
                     stats.events += 1;
                     stories.commit(&y[..n], &y[n..2 * n], None);
-                    rhs(sys, &stories, &seg, &modes, t, &y, &mut dp.k[0]);
+                    rhs(sys, stories, seg, ledger.modes(), t, y, &mut self.dp.k[0]);
                     stats.rhs_evaluations += 1;
-                    observe(sys, &stories, &mut tracker, &modes, &y, history.is_some());
-                    if !(land && t == t_bp) {
-                        tracker.sample(t, history.as_deref_mut());
-                    }
                 }
                 None => {
-                    dp.accept_full(&mut y);
+                    self.dp.accept_full(y);
                     t = if land { t_bp } else { t + hs };
                     stories.commit(&y[..n], &y[n..2 * n], None);
+                    outcome = if land && t == t_bp {
+                        StepOutcome::Breakpoint
+                    } else {
+                        StepOutcome::Accepted
+                    };
                 }
             }
         }
@@ -549,47 +579,258 @@ pub(crate) fn run_from(
         }
         stats.max_step = stats.max_step.max(taken);
         stats.steps += 1;
-        h = hnew;
-        if land && t == t_bp {
-            observe(sys, &stories, &mut tracker, &modes, &y, history.is_some());
-            tracker.sample(t, history.as_deref_mut());
-            interval += 1;
-            if interval < n_int {
-                let next = sys.segment(interval);
-                // The excitation is continuous at a record point except where the record
-                // ends (a jump to zero): only then does FSAL restart with the new piece.
-                let (a_new, a_old) = (next.at(t), seg.at(t));
-                let jump = (a_new - a_old).abs() > 1e-9 * (a_new.abs() + a_old.abs());
-                seg = next;
-                if jump {
-                    rhs(sys, &stories, &seg, &modes, t, &y, &mut dp.k[0]);
-                    stats.rhs_evaluations += 1;
+        self.h = hnew;
+        self.t = t;
+        Ok(outcome)
+    }
+
+    /// Enters the record interval whose ground-motion piece is `next`, at the record point
+    /// reached. The excitation is continuous at a record point except where the record ends
+    /// (a jump to zero): only then does FSAL restart with the new piece.
+    fn enter_segment(&mut self, next: Segment) {
+        let t = self.t;
+        let (a_new, a_old) = (next.at(t), self.seg.at(t));
+        let jump = (a_new - a_old).abs() > 1e-9 * (a_new.abs() + a_old.abs());
+        self.seg = next;
+        if jump {
+            rhs(
+                self.sys,
+                &self.stories,
+                &self.seg,
+                self.ledger.modes(),
+                t,
+                &self.y,
+                &mut self.dp.k[0],
+            );
+            self.stats.rhs_evaluations += 1;
+        }
+    }
+
+    /// Ends the run: the impacts (episodes still open reported up to the end), the energy
+    /// audit, the statistics and the story state.
+    fn finish(self) -> (Vec<Impact>, EnergyAudit, Stats, Stories) {
+        let sys = self.sys;
+        let n = sys.n;
+        let (e_in, e_damp, e_work, imp0) = (2 * n, 2 * n + 1, 2 * n + 2, 2 * n + 3);
+        let y = &self.y;
+        let mut stats = self.stats;
+        if stats.min_step == f64::INFINITY {
+            stats.min_step = 0.0;
+        }
+        let stored_t = sys.stored(y, |i| self.ledger.closed(i));
+        let energy = audit(
+            self.initial,
+            y[e_in],
+            y[e_damp],
+            y[e_work],
+            self.stored0,
+            sys.mech_energy(&self.stories, &y[..n], &y[n..2 * n]),
+            stored_t,
+            self.stories.hysteretic_energy(),
+        );
+        // Episodes still open at the end are reported up to the end of the analysis.
+        let impacts = self.ledger.finish(self.t, |ci| {
+            (sys.contacts[ci].rel(&y[n..2 * n]), y[imp0 + ci])
+        });
+        (impacts, energy, stats, self.stories)
+    }
+}
+
+/// The earliest contact event of the accepted step on its dense output: (θ, contact). Each
+/// contact's event function g is sampled at θ = ¼, ½, ¾, 1 (with the interior extremum of δ
+/// checked between samples, so a closure that opens again inside the step is not missed)
+/// and the first sign change located by Brent. `calls` counts the root-finder evaluations.
+fn earliest_event(
+    sys: &System,
+    ledger: &ContactLedger,
+    dp: &Dopri5,
+    calls: &mut u64,
+) -> Option<(f64, usize)> {
+    let n = sys.n;
+    let mut event: Option<(f64, usize)> = None;
+    for (ci, c) in sys.contacts.iter().enumerate() {
+        let closed = ledger.closed(ci);
+        let law = &c.law;
+        let (l, r, gap) = (c.l, (!c.wall).then_some(c.r), c.gap);
+        let g_at = |th: f64| {
+            let (d, dd) = kin(dp, n, l, r, gap, th);
+            law.event(d, dd)
+        };
+        let (_, mut dd_a) = kin(dp, n, l, r, gap, 0.0);
+        let mut th_a = 0.0;
+        let mut bracket: Option<(f64, f64)> = None;
+        for j in 1..=EVENT_SAMPLES {
+            let th_b = j as f64 / EVENT_SAMPLES as f64;
+            if let Some((te, _)) = event {
+                if th_a >= te {
+                    break;
                 }
+            }
+            let (d_b, dd_b) = kin(dp, n, l, r, gap, th_b);
+            let g_b = law.event(d_b, dd_b);
+            if !closed {
+                if g_b > 0.0 {
+                    bracket = Some((th_a, th_b));
+                } else if dd_a > 0.0 && dd_b < 0.0 {
+                    let tm = locate(|th| kin(dp, n, l, r, gap, th).1, th_a, th_b, calls);
+                    if g_at(tm) > 0.0 {
+                        bracket = Some((th_a, tm));
+                    }
+                }
+            } else if g_b < 0.0 {
+                bracket = Some((th_a, th_b));
+            } else if !law.force_event() && dd_a < 0.0 && dd_b > 0.0 {
+                let tm = locate(|th| kin(dp, n, l, r, gap, th).1, th_a, th_b, calls);
+                if g_at(tm) < 0.0 {
+                    bracket = Some((th_a, tm));
+                }
+            }
+            if bracket.is_some() {
+                break;
+            }
+            th_a = th_b;
+            dd_a = dd_b;
+        }
+        if let Some((a, b)) = bracket {
+            let th = locate(g_at, a, b, calls);
+            if event.map_or(true, |(te, _)| th < te) {
+                event = Some((th, ci));
             }
         }
     }
 
-    // Episodes still open at the end are reported up to the end of the analysis.
+    event
+}
+
+/// Raises the peaks (penetration δ, force) of the closed contacts' episodes over θ ∈ [0,
+/// `th_end`] of the accepted step: at the samples and at the located roots of δ̇ and of
+/// dF/dt = F_δ δ̇ + F_δ̇ δ̈ on the dense output.
+fn episode_peaks(
+    sys: &System,
+    ledger: &mut ContactLedger,
+    dp: &Dopri5,
+    th_end: f64,
+    calls: &mut u64,
+) {
+    let n = sys.n;
     for (ci, c) in sys.contacts.iter().enumerate() {
-        if modes[ci].closed {
-            let dd = c.rel(&y[n..2 * n]);
-            impacts.push(episodes[ci].impact(ci, t, dd, y[imp0 + ci]));
+        if !ledger.closed(ci) {
+            continue;
+        }
+        let (l, r, gap, law, vc) = (
+            c.l,
+            (!c.wall).then_some(c.r),
+            c.gap,
+            &c.law,
+            ledger.v_close(ci),
+        );
+        let ep = ledger.episode_mut(ci);
+        let force_rate = |th: f64| {
+            let (d, dd) = kin(dp, n, l, r, gap, th);
+            let ddd = dp.dense_rate(n + l, th) - r.map_or(0.0, |r| dp.dense_rate(n + r, th));
+            let (kd, kv) = law.tangent(d, dd, vc);
+            kd * dd + kv * ddd
+        };
+        let mut th_a = 0.0;
+        let (_, mut dd_a) = kin(dp, n, l, r, gap, 0.0);
+        let mut fr_a = force_rate(0.0);
+        for j in 1..=EVENT_SAMPLES {
+            let th_b = th_end * j as f64 / EVENT_SAMPLES as f64;
+            let (d_b, dd_b) = kin(dp, n, l, r, gap, th_b);
+            ep.max_pen = ep.max_pen.max(d_b);
+            ep.peak_force = ep.peak_force.max(law.force(d_b, dd_b, vc));
+            if dd_a > 0.0 && dd_b <= 0.0 {
+                let tm = locate(|th| kin(dp, n, l, r, gap, th).1, th_a, th_b, calls);
+                let (d, dd) = kin(dp, n, l, r, gap, tm);
+                ep.max_pen = ep.max_pen.max(d);
+                ep.peak_force = ep.peak_force.max(law.force(d, dd, vc));
+            }
+            let fr_b = force_rate(th_b);
+            if law.kind != structure::scene::ContactLaw::Linear && fr_a > 0.0 && fr_b <= 0.0 {
+                let tm = locate(force_rate, th_a, th_b, calls);
+                let (d, dd) = kin(dp, n, l, r, gap, tm);
+                ep.peak_force = ep.peak_force.max(law.force(d, dd, vc));
+            }
+            th_a = th_b;
+            dd_a = dd_b;
+            fr_a = fr_b;
         }
     }
-    if stats.min_step == f64::INFINITY {
-        stats.min_step = 0.0;
+}
+
+/// [`run`] with the first trial step `first_step` (s) instead of Hairer's starting step when
+/// given (for tests of the step control, e.g. a first step rejected on purpose).
+///
+/// The driver: owns the loop over the record intervals, the response tracker (continuous
+/// peaks from each accepted step's dense output, samples at record points and events), the
+/// history and the overlap audit; the [`GapStepper`] does the integration.
+pub(crate) fn run_from(
+    scene: &Scene,
+    sys: &System,
+    mut history: Option<&mut History>,
+    first_step: Option<f64>,
+) -> Result<RunOutput, SolverError> {
+    let duration = scene.duration;
+    let n_int = sys.n_intervals(duration);
+    let bp = |i: usize| {
+        if i + 1 >= n_int {
+            duration
+        } else {
+            (i + 1) as f64 * sys.sample_dt
+        }
+    };
+    let mut stepper = GapStepper::new(scene, sys, first_step, bp(0));
+    let keep = history.is_some();
+    let mut tracker = ResponseTracker::new(scene);
+    let mut overlaps = crate::overlap::OverlapTracker::new(scene);
+    sys.observe_overlaps(&mut overlaps, 0.0, stepper.u());
+    stepper.observe(&mut tracker, keep);
+    tracker.sample(0.0, history.as_deref_mut());
+
+    let mut scratch = vec![0.0; sys.n];
+    let mut interval = 0usize;
+    while interval < n_int {
+        let outcome = stepper.step(bp(interval), &mut |s: &DenseStep| {
+            dense_peaks(
+                sys,
+                s.stories,
+                s.dp,
+                s.y0,
+                s.y1,
+                s.th_end,
+                &mut tracker,
+                &mut scratch,
+            );
+            if !overlaps.is_empty() {
+                dense_overlaps(sys, s.dp, s.t, s.y0, s.y1, s.th_end, &mut overlaps);
+            }
+        })?;
+        match outcome {
+            StepOutcome::Rejected => continue,
+            StepOutcome::Accepted | StepOutcome::Breakpoint => {}
+            StepOutcome::StoryKink { .. } => {
+                stepper.observe(&mut tracker, keep);
+                tracker.sample(stepper.t(), history.as_deref_mut());
+            }
+            StepOutcome::ContactClosed { breakpoint, .. }
+            | StepOutcome::ContactOpened { breakpoint, .. } => {
+                stepper.observe(&mut tracker, keep);
+                if !breakpoint {
+                    tracker.sample(stepper.t(), history.as_deref_mut());
+                }
+            }
+        }
+        if outcome.at_breakpoint() {
+            stepper.observe(&mut tracker, keep);
+            tracker.sample(stepper.t(), history.as_deref_mut());
+            interval += 1;
+            if interval < n_int {
+                stepper.enter_segment(sys.segment(interval));
+            }
+        }
     }
-    let stored_t = sys.stored(&y, |i| modes[i].closed);
-    let energy = audit(
-        initial,
-        y[e_in],
-        y[e_damp],
-        y[e_work],
-        stored0,
-        sys.mech_energy(&stories, &y[..n], &y[n..2 * n]),
-        stored_t,
-        stories.hysteretic_energy(),
-    );
+
+    let (impacts, energy, stats, stories) = stepper.finish();
     Ok(output(
         sys,
         scene,

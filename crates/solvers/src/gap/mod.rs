@@ -42,6 +42,7 @@
 pub mod adaptive;
 pub mod dopri;
 pub mod law;
+pub(crate) mod ledger;
 pub mod newmark;
 pub mod stories;
 
@@ -51,6 +52,7 @@ use structure::Scene;
 use crate::output::EnergyAudit;
 use crate::{History, RunOutput, SolverError};
 use law::Law;
+pub(crate) use ledger::{ContactLedger, Episode, Mode};
 pub use stories::Stories;
 
 /// Spacing of the record points of a scene without ground motion, s.
@@ -186,14 +188,6 @@ pub(crate) struct System {
     pub omega_max: f64,
     /// Virgin story state of the yielding buildings (empty when all are linear).
     pub stories0: Stories,
-}
-
-/// Mode of one contact during a step of the adaptive integrator.
-#[derive(Debug, Clone, Copy, Default)]
-pub(crate) struct Mode {
-    pub closed: bool,
-    /// Approach speed at closure (Hertz-damp), m/s.
-    pub v_close: f64,
 }
 
 /// Ground acceleration inside one record interval: a(t) = a0 + slope·(t − t0).
@@ -536,16 +530,6 @@ pub(crate) fn output(
     }
 }
 
-/// Tracks one contact episode (closure to opening).
-#[derive(Debug, Clone, Copy, Default)]
-pub(crate) struct Episode {
-    pub t_close: f64,
-    pub v_before: f64,
-    pub impulse0: f64,
-    pub peak_force: f64,
-    pub max_pen: f64,
-}
-
 /// Smallest approach speed at closure for a contact episode to count as an impact whose
 /// restitution is reported, m/s (the default of `momentum.capture_velocity`, so that both
 /// methods call the same contacts "touching").
@@ -565,30 +549,5 @@ pub(crate) fn restitution_undefined(v_before: f64, r: f64) -> Option<&'static st
         Some("ground-driven contact: the rebound is not set by the contact law")
     } else {
         None
-    }
-}
-
-impl Episode {
-    pub fn impact(
-        &self,
-        contact: usize,
-        t_open: f64,
-        v_after: f64,
-        impulse1: f64,
-    ) -> crate::Impact {
-        let r = -v_after / self.v_before;
-        let undefined = restitution_undefined(self.v_before, r);
-        crate::Impact {
-            contact,
-            time: self.t_close,
-            relative_velocity_before: self.v_before,
-            relative_velocity_after: v_after,
-            achieved_restitution: if undefined.is_some() { f64::NAN } else { r },
-            restitution_undefined: undefined.map(String::from),
-            impulse: impulse1 - self.impulse0,
-            duration: Some(t_open - self.t_close),
-            peak_force: Some(self.peak_force),
-            max_penetration: Some(self.max_pen),
-        }
     }
 }

@@ -36,7 +36,8 @@
 use nalgebra::{DMatrix, DVector};
 use structure::Scene;
 
-use super::{audit, output, Episode, System};
+use super::{audit, output, ContactLedger, Episode, System};
+use crate::output::EnergyAudit;
 use crate::response::ResponseTracker;
 use crate::{History, Impact, RunOutput, SolverError, Stats};
 
@@ -52,174 +53,308 @@ pub fn steps_and_step(scene: &Scene) -> (u64, f64) {
     (nsteps, scene.duration / nsteps as f64)
 }
 
-pub(crate) fn run(
-    scene: &Scene,
-    sys: &System,
-    mut history: Option<&mut History>,
-) -> Result<RunOutput, SolverError> {
-    let n = sys.n;
-    let nc = sys.contacts.len();
-    let duration = scene.duration;
-    let (nsteps, dt) = steps_and_step(scene);
-    if nsteps > scene.limits.max_steps {
-        return Err(SolverError::StepBudget {
-            time: 0.0,
-            steps: 0,
-            limit: scene.limits.max_steps,
-        });
-    }
-    let a0 = 4.0 / (dt * dt);
-    let a1 = 2.0 / dt;
+/// The fixed-step Newmark integrator between two steps: the effective-stiffness block
+/// inverses and Z = A⁻¹W (linear and in use), the state (u, v, a) with the committed story
+/// state, the contact forces and impulses, the contact ledger, the energy sums and the
+/// statistics. [`NewmarkStepper::step`] advances by Δt; the driver [`run`] owns the loop,
+/// the response tracker, the history and the overlap audit.
+struct NewmarkStepper<'a> {
+    sys: &'a System,
+    /// Step, s, and the Newmark constants 4/Δt² (1/s²) and 2/Δt (1/s).
+    dt: f64,
+    a0: f64,
+    a1: f64,
+    ainv: Vec<Vec<f64>>,
+    ainv_lin: Vec<Vec<f64>>,
+    z: Vec<DVector<f64>>,
+    wz: DMatrix<f64>,
+    z_lin: Vec<DVector<f64>>,
+    wz_lin: DMatrix<f64>,
+    stories: super::Stories,
+    linear_stories: super::Stories,
+    kt_used: Vec<Vec<f64>>,
+    kt_new: Vec<f64>,
+    tmp: Vec<f64>,
+    /// Floor displacements (m), velocities (m/s), accelerations (m/s²) at the step start.
+    u: Vec<f64>,
+    v: Vec<f64>,
+    acc: Vec<f64>,
+    f: Vec<f64>,
+    /// Contact forces at the step start (N) and accumulated impulses (N·s).
+    force: Vec<f64>,
+    impulse: Vec<f64>,
+    ledger: ContactLedger,
+    stats: Stats,
+    /// Ground acceleration at the step start, m/s².
+    ag: f64,
+    /// Input, damping and contact work so far, J.
+    e_in: f64,
+    e_damp: f64,
+    e_work: f64,
+    u_new: Vec<f64>,
+    v_new: Vec<f64>,
+    a_new: Vec<f64>,
+    res: DVector<f64>,
+    vbar: Vec<f64>,
+    zero: Vec<f64>,
+    f_new: Vec<f64>,
+    alpha: Vec<f64>,
+    vc_trial: Vec<f64>,
+    on: Vec<bool>,
+    visited: Vec<Vec<bool>>,
+    force_closed: Vec<f64>,
+    /// Steps taken.
+    step: u64,
+    /// Initial energy (mechanical + stored in closed contacts), J; stored at t = 0, J.
+    initial: f64,
+    stored0: f64,
+}
 
-    // Effective stiffness A = K + (2/Δt) C + (4/Δt²) M, block diagonal per building: each
-    // block is factorised once (Cholesky) and kept as its explicit inverse, so a solve is a
-    // small dense matvec per building. A yielding building's block is refactorised with the
-    // stories' consistent tangents whenever the set of yielded stories of a Newton iterate
-    // changes (K_t assembled from k_t,j = k₀ or b k₀, see story_law.rs).
-    let mut ainv: Vec<Vec<f64>> = Vec::with_capacity(sys.blocks.len());
-    for b in &sys.blocks {
-        let kt = &sys.story_k[b.off..b.off + b.len];
-        ainv.push(block_inverse(sys, b, kt, a0, a1, 0.0)?);
+/// u ← A⁻¹ r block by block (`ainv`: the explicit block inverses, row-major), in place;
+/// `tmp` holds one block.
+fn solve_blocks(sys: &System, ainv: &[Vec<f64>], r: &mut DVector<f64>, tmp: &mut [f64]) {
+    for (b, inv) in sys.blocks.iter().zip(ainv) {
+        let (o, m) = (b.off, b.len);
+        let rb = &r.as_slice()[o..o + m];
+        let tb = &mut tmp[..m];
+        tb.fill(0.0);
+        // A⁻¹ is symmetric: accumulate by columns.
+        for (col, &rj) in inv.chunks_exact(m).zip(rb) {
+            for (x, &a) in tb.iter_mut().zip(col) {
+                *x += a * rj;
+            }
+        }
+        r.as_mut_slice()[o..o + m].copy_from_slice(tb);
     }
-    let solve = |ainv: &[Vec<f64>], r: &mut DVector<f64>, tmp: &mut [f64]| {
-        for (b, inv) in sys.blocks.iter().zip(ainv) {
-            let (o, m) = (b.off, b.len);
-            let rb = &r.as_slice()[o..o + m];
-            let tb = &mut tmp[..m];
-            tb.fill(0.0);
-            // A⁻¹ is symmetric: accumulate by columns.
-            for (col, &rj) in inv.chunks_exact(m).zip(rb) {
-                for (x, &a) in tb.iter_mut().zip(col) {
-                    *x += a * rj;
+}
+
+/// The law on a frozen state: the smooth branch while `on` (F may be negative: the
+/// active-set check then opens the contact), zero otherwise. (F, ∂F/∂δ, ∂F/∂δ̇).
+fn frozen(c: &super::ContactDof, on: bool, d: f64, dd: f64, vc: f64) -> (f64, f64, f64) {
+    if on {
+        let (kd, kv) = c.law.tangent(d, dd, vc);
+        (c.law.force(d, dd, vc), kd, kv)
+    } else {
+        (0.0, 0.0, 0.0)
+    }
+}
+
+impl<'a> NewmarkStepper<'a> {
+    /// The factorised effective stiffness, the initial state and acceleration (contacts
+    /// carrying force at t = 0 open their episodes), and the number of steps.
+    fn new(scene: &Scene, sys: &'a System) -> Result<(Self, u64), SolverError> {
+        let n = sys.n;
+        let nc = sys.contacts.len();
+        let (nsteps, dt) = steps_and_step(scene);
+        if nsteps > scene.limits.max_steps {
+            return Err(SolverError::StepBudget {
+                time: 0.0,
+                steps: 0,
+                limit: scene.limits.max_steps,
+            });
+        }
+        let a0 = 4.0 / (dt * dt);
+        let a1 = 2.0 / dt;
+
+        // Effective stiffness A = K + (2/Δt) C + (4/Δt²) M, block diagonal per building: each
+        // block is factorised once (Cholesky) and kept as its explicit inverse, so a solve is a
+        // small dense matvec per building. A yielding building's block is refactorised with the
+        // stories' consistent tangents whenever the set of yielded stories of a Newton iterate
+        // changes (K_t assembled from k_t,j = k₀ or b k₀, see story_law.rs).
+        let mut ainv: Vec<Vec<f64>> = Vec::with_capacity(sys.blocks.len());
+        for b in &sys.blocks {
+            let kt = &sys.story_k[b.off..b.off + b.len];
+            ainv.push(block_inverse(sys, b, kt, a0, a1, 0.0)?);
+        }
+        let mut tmp = vec![0.0; sys.blocks.iter().map(|b| b.len).max().unwrap_or(0)];
+        let z: Vec<DVector<f64>> = sys
+            .contacts
+            .iter()
+            .map(|c| {
+                let mut w = DVector::zeros(n);
+                w[c.l] = 1.0;
+                if !c.wall {
+                    w[c.r] = -1.0;
                 }
+                solve_blocks(sys, &ainv, &mut w, &mut tmp);
+                w
+            })
+            .collect();
+        let wz = DMatrix::from_fn(nc, nc, |i, j| sys.contacts[i].rel(z[j].as_slice()));
+        // The linear block inverses and Z = A⁻¹W (those in use, `ainv`/`z`/`wz`, follow the
+        // story tangents of the iterate).
+        let (ainv_lin, z_lin, wz_lin) = (ainv.clone(), z.clone(), wz.clone());
+        let mut stories = sys.stories();
+        let linear_stories = super::Stories::default();
+        // Story tangents of the block inverses in use (per building; the elastic stiffness
+        // when nothing yields).
+        let kt_used: Vec<Vec<f64>> = sys
+            .blocks
+            .iter()
+            .map(|b| sys.story_k[b.off..b.off + b.len].to_vec())
+            .collect();
+        let kt_new: Vec<f64> = Vec::new();
+
+        let u = sys.u0.clone();
+        let v = sys.v0.clone();
+        let mut acc = vec![0.0; n];
+        let mut f = vec![0.0; n];
+        let mut force = vec![0.0; nc];
+        let impulse = vec![0.0; nc];
+        // Contact modes: closed = carries force at the end of the last step; v_close = δ̇⁻ of
+        // the episode.
+        let mut ledger = ContactLedger::new(nc, scene.limits.max_impact_rate);
+        let mut stats = Stats {
+            min_step: dt,
+            max_step: dt,
+            ..Stats::default()
+        };
+
+        let kin = |u: &[f64], v: &[f64], ci: usize| {
+            let c = &sys.contacts[ci];
+            (c.rel(u) - c.gap, c.rel(v))
+        };
+
+        // Initial state and acceleration.
+        for ci in 0..nc {
+            let (d, dd) = kin(&u, &v, ci);
+            let (fc, _, _) = sys.contacts[ci].law.state_force(d, dd, dd);
+            force[ci] = fc;
+            if d > 0.0 && fc != 0.0 {
+                let episode = Episode {
+                    t_close: 0.0,
+                    v_before: dd,
+                    impulse0: 0.0,
+                    peak_force: fc,
+                    max_pen: d,
+                };
+                ledger.close(ci, dd, episode);
+                stats.impacts += 1;
             }
-            r.as_mut_slice()[o..o + m].copy_from_slice(tb);
         }
-    };
-    let mut tmp = vec![0.0; sys.blocks.iter().map(|b| b.len).max().unwrap_or(0)];
-    let z: Vec<DVector<f64>> = sys
-        .contacts
-        .iter()
-        .map(|c| {
-            let mut w = DVector::zeros(n);
-            w[c.l] = 1.0;
-            if !c.wall {
-                w[c.r] = -1.0;
-            }
-            solve(&ainv, &mut w, &mut tmp);
-            w
-        })
-        .collect();
-    let wz = DMatrix::from_fn(nc, nc, |i, j| sys.contacts[i].rel(z[j].as_slice()));
-    // The linear block inverses and Z = A⁻¹W; the ones in use (tangent of the iterate).
-    let (ainv_lin, z_lin, wz_lin) = (ainv.clone(), z.clone(), wz.clone());
-    let (mut z, mut wz) = (z, wz);
-    let mut stories = sys.stories();
-    let linear_stories = super::Stories::default();
-    // Story tangents of the block inverses in use (per building; the elastic stiffness
-    // when nothing yields).
-    let mut kt_used: Vec<Vec<f64>> = sys
-        .blocks
-        .iter()
-        .map(|b| sys.story_k[b.off..b.off + b.len].to_vec())
-        .collect();
-    let mut kt_new: Vec<f64> = Vec::new();
-
-    let mut u = sys.u0.clone();
-    let mut v = sys.v0.clone();
-    let mut acc = vec![0.0; n];
-    let mut f = vec![0.0; n];
-    let mut v_close = vec![0.0; nc];
-    let mut active = vec![false; nc];
-    let mut force = vec![0.0; nc];
-    let mut impulse = vec![0.0; nc];
-    let mut episodes = vec![Episode::default(); nc];
-    let mut impacts: Vec<Impact> = Vec::new();
-    let mut storm = crate::rules::ImpactRateGuard::new(scene.limits.max_impact_rate);
-    let mut stats = Stats {
-        min_step: dt,
-        max_step: dt,
-        ..Stats::default()
-    };
-
-    let kin = |u: &[f64], v: &[f64], ci: usize| {
-        let c = &sys.contacts[ci];
-        (c.rel(u) - c.gap, c.rel(v))
-    };
-
-    // Initial state and acceleration.
-    for ci in 0..nc {
-        let (d, dd) = kin(&u, &v, ci);
-        v_close[ci] = dd;
-        let (fc, _, _) = sys.contacts[ci].law.state_force(d, dd, dd);
-        force[ci] = fc;
-        active[ci] = d > 0.0 && fc != 0.0;
-        if active[ci] {
-            episodes[ci] = Episode {
-                t_close: 0.0,
-                v_before: dd,
-                impulse0: 0.0,
-                peak_force: fc,
-                max_pen: d,
-            };
-            stats.impacts += 1;
+        let stored0 = sys.stored(&u, |i| ledger.closed(i));
+        stories.start(&u, &v);
+        let initial = sys.mech_energy(&stories, &u, &v) + stored0;
+        let ag = sys.ground_at(0.0);
+        sys.internal(&stories, &u, &v, &mut f);
+        for i in 0..n {
+            acc[i] = f[i] - sys.mass[i] * ag;
         }
-    }
-    let stored0 = sys.stored(&u, |i| active[i]);
-    stories.start(&u, &v);
-    let initial = sys.mech_energy(&stories, &u, &v) + stored0;
-    let mut ag = sys.ground_at(0.0);
-    sys.internal(&stories, &u, &v, &mut f);
-    for i in 0..n {
-        acc[i] = f[i] - sys.mass[i] * ag;
-    }
-    for (ci, c) in sys.contacts.iter().enumerate() {
-        c.push_apart(&mut acc, force[ci]);
-    }
-    for i in 0..n {
-        acc[i] *= sys.inv_mass[i];
-    }
-
-    let mut tracker = ResponseTracker::new(scene);
-    let mut overlaps = crate::overlap::OverlapTracker::new(scene);
-    sys.observe_overlaps(&mut overlaps, 0.0, &u);
-    sys.observe_sample(&stories, &mut tracker, &u, &v, &force);
-    tracker.sample(0.0, history.as_deref_mut());
-
-    let (mut e_in, mut e_damp, mut e_work) = (0.0, 0.0, 0.0);
-    let mut u_new = vec![0.0; n];
-    let mut v_new = vec![0.0; n];
-    let mut a_new = vec![0.0; n];
-    let mut res = DVector::<f64>::zeros(n);
-    let mut vbar = vec![0.0; n];
-    let zero = vec![0.0; n];
-    let mut f_new = vec![0.0; nc];
-    let mut alpha = vec![0.0; nc];
-    let mut vc_trial = vec![0.0; nc];
-
-    let mut on = vec![false; nc];
-    let mut visited: Vec<Vec<bool>> = Vec::new();
-    // Force of each contact in the last solve that held it closed (NaN if none this step).
-    let mut force_closed = vec![f64::NAN; nc];
-    // The law on a frozen state: the smooth branch while `on` (F may be negative: the
-    // active-set check then opens the contact), zero otherwise.
-    let frozen = |c: &super::ContactDof, on: bool, d: f64, dd: f64, vc: f64| {
-        if on {
-            let (kd, kv) = c.law.tangent(d, dd, vc);
-            (c.law.force(d, dd, vc), kd, kv)
-        } else {
-            (0.0, 0.0, 0.0)
+        for (ci, c) in sys.contacts.iter().enumerate() {
+            c.push_apart(&mut acc, force[ci]);
         }
-    };
+        for i in 0..n {
+            acc[i] *= sys.inv_mass[i];
+        }
+        let u_new = vec![0.0; n];
+        let v_new = vec![0.0; n];
+        let a_new = vec![0.0; n];
+        let res = DVector::<f64>::zeros(n);
+        let vbar = vec![0.0; n];
+        let zero = vec![0.0; n];
+        let f_new = vec![0.0; nc];
+        let alpha = vec![0.0; nc];
+        let vc_trial = vec![0.0; nc];
 
-    for step in 0..nsteps {
+        let on = vec![false; nc];
+        let visited: Vec<Vec<bool>> = Vec::new();
+        // Force of each contact in the last solve that held it closed (NaN if none this step).
+        let force_closed = vec![f64::NAN; nc];
+        let stepper = NewmarkStepper {
+            sys,
+            dt,
+            a0,
+            a1,
+            ainv,
+            ainv_lin,
+            z,
+            wz,
+            z_lin,
+            wz_lin,
+            stories,
+            linear_stories,
+            kt_used,
+            kt_new,
+            tmp,
+            u,
+            v,
+            acc,
+            f,
+            force,
+            impulse,
+            ledger,
+            stats,
+            ag,
+            e_in: 0.0,
+            e_damp: 0.0,
+            e_work: 0.0,
+            u_new,
+            v_new,
+            a_new,
+            res,
+            vbar,
+            zero,
+            f_new,
+            alpha,
+            vc_trial,
+            on,
+            visited,
+            force_closed,
+            step: 0,
+            initial,
+            stored0,
+        };
+        Ok((stepper, nsteps))
+    }
+
+    /// One Newmark step: active-set iteration on the contact states around Newton solves,
+    /// then the energy sums, the contact ledger (closures and openings of the step) and the
+    /// committed story state. Returns the time reached, s.
+    fn step(&mut self) -> Result<f64, SolverError> {
+        let sys = self.sys;
+        let n = sys.n;
+        let nc = sys.contacts.len();
+        let (dt, a0, a1, step) = (self.dt, self.a0, self.a1, self.step);
+        let kin = |u: &[f64], v: &[f64], ci: usize| {
+            let c = &sys.contacts[ci];
+            (c.rel(u) - c.gap, c.rel(v))
+        };
+        let NewmarkStepper {
+            ainv,
+            ainv_lin,
+            z,
+            wz,
+            z_lin,
+            wz_lin,
+            stories,
+            kt_used,
+            kt_new,
+            tmp,
+            u,
+            v,
+            acc,
+            f,
+            ledger,
+            stats,
+            u_new,
+            v_new,
+            a_new,
+            res,
+            f_new,
+            alpha,
+            vc_trial,
+            on,
+            visited,
+            force_closed,
+            ..
+        } = self;
         let t1 = (step + 1) as f64 * dt;
         let ag1 = sys.ground_at(t1);
         for ci in 0..nc {
-            vc_trial[ci] = if active[ci] {
-                v_close[ci]
+            vc_trial[ci] = if ledger.closed(ci) {
+                ledger.v_close(ci)
             } else {
-                kin(&u, &v, ci).1
+                kin(u, v, ci).1
             };
         }
         for i in 0..n {
@@ -230,7 +365,9 @@ pub(crate) fn run(
         // then the states are checked against the law at the solution and the inconsistent
         // ones flipped, until none is (a frozen set never makes Newton flip-flop across the
         // kink of a clamped law). Starts from the states of the last step.
-        on.copy_from_slice(&active);
+        for (o, m) in on.iter_mut().zip(ledger.modes()) {
+            *o = m.closed;
+        }
         visited.clear();
         force_closed.fill(f64::NAN);
         let mut settled = false;
@@ -243,7 +380,7 @@ pub(crate) fn run(
                     a_new[i] = a0 * (u_new[i] - u[i] - dt * v[i]) - acc[i];
                     v_new[i] = v[i] + 0.5 * dt * (acc[i] + a_new[i]);
                 }
-                sys.internal(&stories, &u_new, &v_new, &mut f);
+                sys.internal(stories, u_new, v_new, f);
                 if !stories.is_empty() {
                     // Consistent tangents of the iterate (trial from the state committed at
                     // the step start): refactorise the blocks whose yielded set changed.
@@ -259,14 +396,14 @@ pub(crate) fn run(
                             kt_new.push(stories.story_force(bi, j, d).1);
                             below = u_new[b.off + j];
                         }
-                        if kt_new != kt_used[bi] {
-                            let elastic = kt_new == sys.story_k[b.off..b.off + b.len];
+                        if *kt_new != kt_used[bi] {
+                            let elastic = *kt_new == sys.story_k[b.off..b.off + b.len];
                             ainv[bi] = if elastic {
                                 ainv_lin[bi].clone()
                             } else {
-                                block_inverse(sys, b, &kt_new, a0, a1, t1)?
+                                block_inverse(sys, b, kt_new, a0, a1, t1)?
                             };
-                            kt_used[bi].clone_from(&kt_new);
+                            kt_used[bi].clone_from(kt_new);
                             changed = true;
                         }
                     }
@@ -276,8 +413,8 @@ pub(crate) fn run(
                             .zip(&sys.blocks)
                             .all(|(k, b)| k[..] == sys.story_k[b.off..b.off + b.len])
                         {
-                            z.clone_from(&z_lin);
-                            wz.clone_from(&wz_lin);
+                            z.clone_from(z_lin);
+                            wz.clone_from(wz_lin);
                         } else {
                             for (ci, c) in sys.contacts.iter().enumerate() {
                                 let zc = &mut z[ci];
@@ -286,9 +423,9 @@ pub(crate) fn run(
                                 if !c.wall {
                                     zc[c.r] = -1.0;
                                 }
-                                solve(&ainv, zc, &mut tmp);
+                                solve_blocks(sys, ainv, zc, tmp);
                             }
-                            wz = DMatrix::from_fn(nc, nc, |i, j| {
+                            *wz = DMatrix::from_fn(nc, nc, |i, j| {
                                 sys.contacts[i].rel(z[j].as_slice())
                             });
                         }
@@ -302,7 +439,7 @@ pub(crate) fn run(
                     scale = scale.max(p.abs()).max(ma.abs()).max(f[i].abs());
                 }
                 for (ci, c) in sys.contacts.iter().enumerate() {
-                    let (d, dd) = kin(&u_new, &v_new, ci);
+                    let (d, dd) = kin(u_new, v_new, ci);
                     let (fc, kd, kv) = frozen(c, on[ci], d, dd, vc_trial[ci]);
                     f_new[ci] = fc;
                     alpha[ci] = kd + a1 * kv;
@@ -328,7 +465,7 @@ pub(crate) fn run(
                 }
                 stats.newton_iterations += 1;
                 // du = (A + W D Wᵀ)⁻¹ R by Woodbury.
-                solve(&ainv, &mut res, &mut tmp);
+                solve_blocks(sys, ainv, res, tmp);
                 let act: Vec<usize> = (0..nc).filter(|&i| alpha[i] != 0.0).collect();
                 if !act.is_empty() {
                     let m = act.len();
@@ -363,7 +500,7 @@ pub(crate) fn run(
                         v_new[i] = v[i] + 0.5 * dt * (acc[i] + a_new[i]);
                     }
                     for (ci, c) in sys.contacts.iter().enumerate() {
-                        let (d, dd) = kin(&u_new, &v_new, ci);
+                        let (d, dd) = kin(u_new, v_new, ci);
                         f_new[ci] = frozen(c, on[ci], d, dd, vc_trial[ci]).0;
                     }
                     converged = true;
@@ -387,7 +524,7 @@ pub(crate) fn run(
             // fixed-step method.
             let mut flipped = false;
             for (ci, c) in sys.contacts.iter().enumerate() {
-                let (d, dd) = kin(&u_new, &v_new, ci);
+                let (d, dd) = kin(u_new, v_new, ci);
                 let carries = if on[ci] {
                     f_new[ci] > 0.0
                         || (c.law.kind == structure::scene::ContactLaw::KelvinVoigt
@@ -405,12 +542,12 @@ pub(crate) fn run(
                 break 'sets;
             }
             stats.active_set_iterations += 1;
-            if visited.contains(&on) || visited.len() >= MAX_SET_PASSES {
+            if visited.contains(on) || visited.len() >= MAX_SET_PASSES {
                 // No consistent set: a contact opens and closes again inside the step (the
                 // law jumps at δ = 0). Keep closed only the contacts whose force was
                 // compressive when closed, solve once more, and accept: the contact changes
                 // state at the next step instead (O(Δt), counted in the statistics).
-                for (o, &f) in on.iter_mut().zip(&force_closed) {
+                for (o, &f) in on.iter_mut().zip(force_closed.iter()) {
                     *o = f > 0.0;
                 }
                 settled = true;
@@ -429,80 +566,141 @@ pub(crate) fn run(
             });
         }
 
+        self.accept(t1, ag1)?;
+        self.step += 1;
+        Ok(t1)
+    }
+
+    /// Books a converged step ending at `t1` (s; ground acceleration `ag1`, m/s²): the
+    /// energy sums (trapezoidal), the contact impulses and the ledger (closures, episode
+    /// peaks, openings); then the state and the committed stories move on.
+    fn accept(&mut self, t1: f64, ag1: f64) -> Result<(), SolverError> {
+        let sys = self.sys;
+        let n = sys.n;
+        let nc = sys.contacts.len();
+        let (dt, ag) = (self.dt, self.ag);
+        let (mut e_in, mut e_damp, mut e_work) = (self.e_in, self.e_damp, self.e_work);
+        let kin = |u: &[f64], v: &[f64], ci: usize| {
+            let c = &sys.contacts[ci];
+            (c.rel(u) - c.gap, c.rel(v))
+        };
+        let NewmarkStepper {
+            stories,
+            linear_stories,
+            u,
+            v,
+            acc,
+            f,
+            force,
+            impulse,
+            ledger,
+            stats,
+            u_new,
+            v_new,
+            a_new,
+            vbar,
+            zero,
+            f_new,
+            vc_trial,
+            ..
+        } = self;
         // Energy (trapezoidal sums).
         let agbar = 0.5 * (ag + ag1);
         for i in 0..n {
             e_in -= sys.mass[i] * (u_new[i] - u[i]) * agbar;
             vbar[i] = 0.5 * (v[i] + v_new[i]);
         }
-        e_damp += dt * sys.internal(&linear_stories, &zero, &vbar, &mut f);
+        e_damp += dt * sys.internal(linear_stories, zero, vbar, f);
         for ci in 0..nc {
-            let (d0, _) = kin(&u, &v, ci);
-            let (d1, dd1) = kin(&u_new, &v_new, ci);
+            let (d0, _) = kin(u, v, ci);
+            let (d1, dd1) = kin(u_new, v_new, ci);
             let fbar = 0.5 * (force[ci] + f_new[ci]);
             e_work += (d1 - d0) * fbar;
             impulse[ci] += dt * fbar;
             let now = f_new[ci] != 0.0;
-            if now && !active[ci] {
-                let (_, dd0) = kin(&u, &v, ci);
-                episodes[ci] = Episode {
+            if now && !ledger.closed(ci) {
+                let (_, dd0) = kin(u, v, ci);
+                let episode = Episode {
                     t_close: t1,
                     v_before: dd0,
                     impulse0: impulse[ci] - dt * fbar,
                     peak_force: 0.0,
                     max_pen: 0.0,
                 };
-                v_close[ci] = vc_trial[ci];
                 stats.impacts += 1;
                 stats.events += 1;
-                storm.record(t1, || format!("contact {ci} keeps closing (gap element)"))?;
+                ledger.close_at(ci, t1, vc_trial[ci], episode)?;
             }
             if now {
-                let ep = &mut episodes[ci];
+                let ep = ledger.episode_mut(ci);
                 ep.peak_force = ep.peak_force.max(f_new[ci]);
                 ep.max_pen = ep.max_pen.max(d1);
             }
-            if !now && active[ci] {
-                impacts.push(episodes[ci].impact(ci, t1, dd1, impulse[ci]));
+            if !now && ledger.closed(ci) {
+                ledger.open(ci, t1, dd1, impulse[ci]);
                 stats.events += 1;
             }
-            active[ci] = now;
             force[ci] = f_new[ci];
         }
-        u.copy_from_slice(&u_new);
-        v.copy_from_slice(&v_new);
-        acc.copy_from_slice(&a_new);
-        stories.commit(&u, &v, None);
-        ag = ag1;
+        u.copy_from_slice(u_new);
+        v.copy_from_slice(v_new);
+        acc.copy_from_slice(a_new);
+        stories.commit(u, v, None);
+        self.ag = ag1;
         stats.steps += 1;
+        self.e_in = e_in;
+        self.e_damp = e_damp;
+        self.e_work = e_work;
+        Ok(())
+    }
+
+    /// Ends the run at `t_end` (s): the impacts (episodes still open reported up to the
+    /// end), the energy audit, the statistics and the story state.
+    fn finish(self, t_end: f64) -> (Vec<Impact>, EnergyAudit, Stats, super::Stories) {
+        let sys = self.sys;
+        let (u, v, impulse) = (&self.u, &self.v, &self.impulse);
+        let stored_t = sys.stored(u, |i| self.ledger.closed(i));
+        let kin = |ci: usize| sys.contacts[ci].rel(v);
+        let impacts = self.ledger.finish(t_end, |ci| (kin(ci), impulse[ci]));
+        let energy = audit(
+            self.initial,
+            self.e_in,
+            self.e_damp,
+            self.e_work,
+            self.stored0,
+            sys.mech_energy(&self.stories, u, v),
+            stored_t,
+            self.stories.hysteretic_energy(),
+        );
+        (impacts, energy, self.stats, self.stories)
+    }
+}
+
+/// The driver: the Newmark steps in turn, the response observed after each.
+pub(crate) fn run(
+    scene: &Scene,
+    sys: &System,
+    mut history: Option<&mut History>,
+) -> Result<RunOutput, SolverError> {
+    let (mut st, nsteps) = NewmarkStepper::new(scene, sys)?;
+    let mut tracker = ResponseTracker::new(scene);
+    let mut overlaps = crate::overlap::OverlapTracker::new(scene);
+    sys.observe_overlaps(&mut overlaps, 0.0, &st.u);
+    sys.observe_sample(&st.stories, &mut tracker, &st.u, &st.v, &st.force);
+    tracker.sample(0.0, history.as_deref_mut());
+    for _ in 0..nsteps {
+        let t1 = st.step()?;
         // Peaks at every step, as a finite-element program reports them (not continuous
         // maxima: between steps Newmark has no interpolant of its own accuracy).
         if history.is_some() {
-            sys.observe_sample(&stories, &mut tracker, &u, &v, &force);
+            sys.observe_sample(&st.stories, &mut tracker, &st.u, &st.v, &st.force);
         } else {
-            sys.observe(&stories, &mut tracker, &u);
+            sys.observe(&st.stories, &mut tracker, &st.u);
         }
-        sys.observe_overlaps(&mut overlaps, t1, &u);
+        sys.observe_overlaps(&mut overlaps, t1, &st.u);
         tracker.sample(t1, history.as_deref_mut());
     }
-
-    for ci in 0..nc {
-        if active[ci] {
-            let (_, dd) = kin(&u, &v, ci);
-            impacts.push(episodes[ci].impact(ci, duration, dd, impulse[ci]));
-        }
-    }
-    let stored_t = sys.stored(&u, |i| active[i]);
-    let energy = audit(
-        initial,
-        e_in,
-        e_damp,
-        e_work,
-        stored0,
-        sys.mech_energy(&stories, &u, &v),
-        stored_t,
-        stories.hysteretic_energy(),
-    );
+    let (impacts, energy, stats, stories) = st.finish(scene.duration);
     Ok(output(
         sys,
         scene,
