@@ -204,23 +204,9 @@ fn wall_contact(gap: f64, cr: f64) -> Contact {
     }
 }
 
-/// Closed-form impact times and approach speeds of the undamped oscillator (m, k) leaving
-/// u = 0 at V0 toward a wall at GAP: first impact at t₁ = asin(gω/v0)/ω with v₁ = v0 cos ωt₁;
-/// after impact n it leaves u = g at −c_rⁿ v₁ and returns after
-/// τₙ = (2π − 2 acos(g/A))/ω, A = √(g² + (c_rⁿ v₁/ω)²), at the speed it left with.
+/// Closed-form impacts of the oscillator (see [`structure::testing::wall_impacts`]).
 fn wall_closed_form(cr: f64, duration: f64) -> Vec<(f64, f64)> {
-    let w = (K / M).sqrt();
-    let mut t = (GAP * w / V0).asin() / w;
-    let mut v = V0 * (w * t).cos();
-    let mut out = vec![];
-    while t < duration {
-        out.push((t, v));
-        let after = cr * v;
-        let a = (GAP * GAP + (after / w).powi(2)).sqrt();
-        t += (2.0 * std::f64::consts::PI - 2.0 * (GAP / a).acos()) / w;
-        v = after;
-    }
-    out
+    structure::testing::wall_impacts(M, K, V0, GAP, cr, duration)
 }
 
 #[test]

@@ -35,20 +35,9 @@ fn oscillator(cr: f64, duration: f64) -> Scene {
     free_scene(vec![b], vec![wall_contact(0, GAP, cr)], duration)
 }
 
-/// Closed-form impact times and approach speeds up to `duration`.
+/// Closed-form impacts of the oscillator (see [`structure::testing::wall_impacts`]).
 fn closed_form(cr: f64, duration: f64) -> Vec<(f64, f64)> {
-    let w = (K / M).sqrt();
-    let mut t = (GAP * w / V0).asin() / w;
-    let mut v = V0 * (w * t).cos();
-    let mut out = vec![];
-    while t < duration {
-        out.push((t, v));
-        let after = cr * v;
-        let a = (GAP * GAP + (after / w).powi(2)).sqrt();
-        t += (2.0 * std::f64::consts::PI - 2.0 * (GAP / a).acos()) / w;
-        v = after;
-    }
-    out
+    structure::testing::wall_impacts(M, K, V0, GAP, cr, duration)
 }
 
 #[test]

@@ -87,3 +87,23 @@ pub fn refined(g: &GroundMotion, k: usize) -> GroundMotion {
         accel,
     }
 }
+
+/// Closed-form impacts (time s, approach speed m/s) up to `duration` of the undamped
+/// oscillator of mass `m` (kg) and stiffness `k` (N/m) leaving u = 0 at `v0` (m/s) toward a
+/// rigid wall at `gap` (m) with restitution `cr`: the first impact at t₁ = asin(gω/v₀)/ω with
+/// v₁ = v₀ cos ωt₁; after impact n it leaves u = g at −c_rⁿ v₁ and returns after
+/// τₙ = (2π − 2 acos(g/A))/ω, A = √(g² + (c_rⁿ v₁/ω)²), at the speed it left with.
+pub fn wall_impacts(m: f64, k: f64, v0: f64, gap: f64, cr: f64, duration: f64) -> Vec<(f64, f64)> {
+    let w = (k / m).sqrt();
+    let mut t = (gap * w / v0).asin() / w;
+    let mut v = v0 * (w * t).cos();
+    let mut out = vec![];
+    while t < duration {
+        out.push((t, v));
+        let after = cr * v;
+        let a = (gap * gap + (after / w).powi(2)).sqrt();
+        t += (2.0 * std::f64::consts::PI - 2.0 * (gap / a).acos()) / w;
+        v = after;
+    }
+    out
+}

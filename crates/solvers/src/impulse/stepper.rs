@@ -423,16 +423,11 @@ impl<'a> Run<'a> {
             let mut graze = Vec::new();
             for (k, &c) in set.iter().enumerate().skip(held.len()) {
                 if lam[k] >= -tol[k] && !opts.persistent_contact {
-                    return Err(SolverError::Stalled {
-                        time: t,
-                        reason: format!(
-                            "contact {c} touches at rest under a compressive force (the \
-                             accumulation point of chattering impacts, c_r = {}); without \
-                             persistent contact (momentum.persistent_contact = false) the \
-                             method cannot go on",
-                            self.geoms[c].restitution
-                        ),
-                    });
+                    return Err(crate::momentum::impact::stalled_without_persistence(
+                        c,
+                        t,
+                        self.geoms[c].restitution,
+                    ));
                 }
                 if lam[k] >= -tol[k] {
                     join.push(c);

@@ -68,16 +68,7 @@ impl Stepper<'_> {
             // tensile, instead of grazing again and again at the same state).
             for (k, &c) in set.iter().enumerate().skip(join.len()) {
                 if lam[k] >= -tol[k] && !p.options.persistent_contact {
-                    return Err(SolverError::Stalled {
-                        time: t,
-                        reason: format!(
-                            "contact {c} touches at rest under a compressive force (the \
-                             accumulation point of chattering impacts, c_r = {}); without \
-                             persistent contact (momentum.persistent_contact = false) the \
-                             method cannot go on",
-                            p.contacts[c].restitution
-                        ),
-                    });
+                    return Err(stalled_without_persistence(c, t, p.contacts[c].restitution));
                 }
                 if lam[k] >= -tol[k] {
                     join.push(c);
@@ -284,5 +275,19 @@ pub(crate) fn restitution(v_before: f64, v_after: f64, undefined: Option<&str>) 
         1.0
     } else {
         r
+    }
+}
+
+/// The error of a contact that touches at rest under a compressive force (the accumulation
+/// point of chattering impacts) when persistent contact is switched off: the impact law
+/// cannot go on (shared by the momentum and impulse methods). `t` in s, `restitution` c_r.
+pub(crate) fn stalled_without_persistence(contact: usize, t: f64, restitution: f64) -> SolverError {
+    SolverError::Stalled {
+        time: t,
+        reason: format!(
+            "contact {contact} touches at rest under a compressive force (the accumulation \
+             point of chattering impacts, c_r = {restitution}); without persistent contact \
+             (momentum.persistent_contact = false) the method cannot go on"
+        ),
     }
 }
