@@ -14,7 +14,7 @@ use structure::{GroundMotion, RecordFormat, Scene};
 use studies::export::{opensees_caveats, opensees_script, ExportError};
 
 mod common;
-use common::{pound, TempDir};
+use common::{opensees_python, pound, TempDir};
 
 fn records_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/ground-motions")
@@ -431,37 +431,6 @@ fn cli_help_lists_export() {
 // ---------------------------------------------------------------------------------------
 // Opt-in: run the script with OpenSeesPy
 // ---------------------------------------------------------------------------------------
-
-/// `python3` with the library folder of the `openseespylinux` wheel on LD_LIBRARY_PATH (its
-/// bundled liblapack needs the bundled libblas), or None when openseespy does not import.
-fn opensees_python() -> Option<Command> {
-    python3()?;
-    let find = Command::new("python3")
-        .args([
-            "-c",
-            "import importlib.util as u, os\n\
-             s = u.find_spec('openseespylinux')\n\
-             print(os.path.join(list(s.submodule_search_locations)[0], 'lib') if s else '')",
-        ])
-        .output()
-        .ok()?;
-    let lib = String::from_utf8_lossy(&find.stdout).trim().to_string();
-    let mk = || {
-        let mut c = Command::new("python3");
-        if !lib.is_empty() {
-            let old = std::env::var("LD_LIBRARY_PATH").unwrap_or_default();
-            c.env("LD_LIBRARY_PATH", format!("{lib}:{old}"));
-        }
-        c
-    };
-    let ok = mk()
-        .args(["-c", "import openseespy.opensees"])
-        .output()
-        .ok()?
-        .status
-        .success();
-    ok.then(mk)
-}
 
 fn json(path: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()

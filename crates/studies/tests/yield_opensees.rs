@@ -10,14 +10,13 @@
 //!   against the committed reference.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use solvers::Method;
 use structure::Scene;
 use studies::export::{opensees_caveats, opensees_script};
 
 mod common;
-use common::{pound, TempDir};
+use common::{opensees_python, pound, TempDir};
 
 /// Relative agreement required on every peak story shear (issue 13).
 const SHEAR_TOL: f64 = 1e-6;
@@ -137,37 +136,6 @@ fn pound_newmark_matches_the_committed_opensees_reference() {
         // Both close a contact at the end of the first step with force: same step.
         assert!((a - b).abs() < 0.5e-3, "impact at {a} s vs {b} s");
     }
-}
-
-/// `python3` with the library folder of the `openseespylinux` wheel on LD_LIBRARY_PATH (its
-/// bundled liblapack needs the bundled libblas), or None when openseespy does not import
-/// (as in tests/export.rs).
-fn opensees_python() -> Option<Command> {
-    let find = Command::new("python3")
-        .args([
-            "-c",
-            "import importlib.util as u, os\n\
-             s = u.find_spec('openseespylinux')\n\
-             print(os.path.join(list(s.submodule_search_locations)[0], 'lib') if s else '')",
-        ])
-        .output()
-        .ok()?;
-    let lib = String::from_utf8_lossy(&find.stdout).trim().to_string();
-    let mk = || {
-        let mut c = Command::new("python3");
-        if !lib.is_empty() {
-            let old = std::env::var("LD_LIBRARY_PATH").unwrap_or_default();
-            c.env("LD_LIBRARY_PATH", format!("{lib}:{old}"));
-        }
-        c
-    };
-    let ok = mk()
-        .args(["-c", "import openseespy.opensees"])
-        .output()
-        .ok()?
-        .status
-        .success();
-    ok.then(mk)
 }
 
 #[test]

@@ -81,3 +81,34 @@ pub fn read_csv(path: &std::path::Path) -> Vec<Vec<String>> {
     }
     rows
 }
+
+/// `python3` with the library folder of the `openseespylinux` wheel on LD_LIBRARY_PATH (its
+/// bundled liblapack needs the bundled libblas), or None when openseespy does not import
+/// (also when python3 itself is missing).
+pub fn opensees_python() -> Option<std::process::Command> {
+    let find = std::process::Command::new("python3")
+        .args([
+            "-c",
+            "import importlib.util as u, os\n\
+             s = u.find_spec('openseespylinux')\n\
+             print(os.path.join(list(s.submodule_search_locations)[0], 'lib') if s else '')",
+        ])
+        .output()
+        .ok()?;
+    let lib = String::from_utf8_lossy(&find.stdout).trim().to_string();
+    let mk = || {
+        let mut c = std::process::Command::new("python3");
+        if !lib.is_empty() {
+            let old = std::env::var("LD_LIBRARY_PATH").unwrap_or_default();
+            c.env("LD_LIBRARY_PATH", format!("{lib}:{old}"));
+        }
+        c
+    };
+    let ok = mk()
+        .args(["-c", "import openseespy.opensees"])
+        .output()
+        .ok()?
+        .status
+        .success();
+    ok.then(mk)
+}
