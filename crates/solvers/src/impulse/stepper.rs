@@ -215,6 +215,22 @@ impl<'a> Run<'a> {
         self.sys.n
     }
 
+    /// The derivative at the current state into `k0` (the first stage of the next step):
+    /// a restart of the FSAL chain after the state, the held set or the ground piece changed.
+    fn restart(&mut self, seg: &Segment, k0: &mut [f64]) {
+        rhs(
+            self.sys,
+            &self.stories,
+            seg,
+            &self.held,
+            &mut self.buf,
+            self.t,
+            &self.y,
+            k0,
+        );
+        self.stats.rhs_evaluations += 1;
+    }
+
     /// Kinetic energy ½ vᵀ M v, J.
     fn kinetic(&self) -> f64 {
         let n = self.n();
@@ -630,17 +646,7 @@ pub(crate) fn run<'a>(
     let mut interval = 0usize;
     let mut seg = sys.segment(0);
 
-    rhs(
-        sys,
-        &r.stories,
-        &seg,
-        &r.held,
-        &mut r.buf,
-        r.t,
-        &r.y,
-        &mut dp.k[0],
-    );
-    r.stats.rhs_evaluations += 1;
+    r.restart(&seg, &mut dp.k[0]);
     let mut h = {
         let (stories, held, buf) = (&r.stories, &r.held, &mut r.buf);
         let mut f =
@@ -660,17 +666,7 @@ pub(crate) fn run<'a>(
             if ratio < -1.0 {
                 let c = r.held.set[k];
                 r.release(c)?;
-                rhs(
-                    sys,
-                    &r.stories,
-                    &seg,
-                    &r.held,
-                    &mut r.buf,
-                    r.t,
-                    &r.y,
-                    &mut dp.k[0],
-                );
-                r.stats.rhs_evaluations += 1;
+                r.restart(&seg, &mut dp.k[0]);
                 continue;
             }
         }
@@ -895,17 +891,7 @@ pub(crate) fn run<'a>(
             }
         }
         if restart {
-            rhs(
-                sys,
-                &r.stories,
-                &seg,
-                &r.held,
-                &mut r.buf,
-                r.t,
-                &r.y,
-                &mut dp.k[0],
-            );
-            r.stats.rhs_evaluations += 1;
+            r.restart(&seg, &mut dp.k[0]);
         }
     }
 
