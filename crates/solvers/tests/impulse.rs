@@ -321,20 +321,7 @@ fn two_free_masses_rebound_by_stereomechanics() {
     // particles: springs of 1e-3 N/m over 2 µs): v1' = −0.22, v2' = 0.30 m/s,
     // ΔE = ½ (1 − e²) μ v² = 201 600 J, P = (1 + e) μ v with μ = m1 m2/(m1 + m2).
     let (m1, m2, e) = (2.0e6, 2.4e6, 0.65);
-    let mut a = Building::new("left", vec![m1], vec![1e-3], 0.0);
-    a.initial_velocity = vec![0.5];
-    let mut b = Building::new("right", vec![m2], vec![1e-3], 0.0);
-    b.initial_velocity = vec![-0.3];
-    let c = Contact {
-        left: 0,
-        left_dof: 0,
-        right: 1,
-        right_dof: 0,
-        gap: 1e-6,
-        restitution: e,
-        wall: false,
-    };
-    let scene = free_scene(vec![a, b], vec![c], 2e-6);
+    let scene = structure::testing::stereomechanics(e);
     let mut hist = History::default();
     let out = impulse::solve(&scene, Some(&mut hist)).unwrap();
     assert_eq!(out.impacts.len(), 1);

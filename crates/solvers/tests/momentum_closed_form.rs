@@ -29,22 +29,9 @@ fn first_impact_time_matches_closed_form() {
 #[test]
 fn post_impact_velocities_match_stereomechanics() {
     for variant in [ImpulseVariant::Consistent, ImpulseVariant::Paper] {
-        let (m1, m2, e) = (2.0e6, 2.4e6, 0.65);
-        // Very soft springs: free particles over the few microseconds simulated.
-        let mut a = Building::new("left", vec![m1], vec![1e-3], 0.0);
-        a.initial_velocity = vec![0.5];
-        let mut b = Building::new("right", vec![m2], vec![1e-3], 0.0);
-        b.initial_velocity = vec![-0.3];
-        let c = Contact {
-            left: 0,
-            left_dof: 0,
-            right: 1,
-            right_dof: 0,
-            gap: 1e-6,
-            restitution: e,
-            wall: false,
-        };
-        let mut scene = free_scene(vec![a, b], vec![c], 2e-6);
+        let (m1, m2, e): (f64, f64, f64) = (2.0e6, 2.4e6, 0.65);
+        // Near-free particles over the few microseconds simulated.
+        let mut scene = structure::testing::stereomechanics(e);
         scene.momentum.impulse = variant;
         let (out, d) = solve_with_diagnostics(&scene, None).unwrap();
         assert_eq!(out.impacts.len(), 1);

@@ -107,3 +107,23 @@ pub fn wall_impacts(m: f64, k: f64, v0: f64, gap: f64, cr: f64, duration: f64) -
     }
     out
 }
+
+/// Two near-free masses about to collide (the stereomechanical impact): m1 = 2e6 kg at
+/// 0.5 m/s toward m2 = 2.4e6 kg at −0.3 m/s, 1 µm apart, restitution `cr`, stories of
+/// 1e-3 N/m (free particles over the 2 µs simulated).
+pub fn stereomechanics(cr: f64) -> Scene {
+    let mut a = Building::new("left", vec![2.0e6], vec![1e-3], 0.0);
+    a.initial_velocity = vec![0.5];
+    let mut b = Building::new("right", vec![2.4e6], vec![1e-3], 0.0);
+    b.initial_velocity = vec![-0.3];
+    let c = Contact {
+        left: 0,
+        left_dof: 0,
+        right: 1,
+        right_dof: 0,
+        gap: 1e-6,
+        restitution: cr,
+        wall: false,
+    };
+    free_scene(vec![a, b], vec![c], 2e-6)
+}
