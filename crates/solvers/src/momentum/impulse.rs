@@ -80,6 +80,25 @@ impl ContactGeom {
     pub fn delta(&self, x: &[f64]) -> f64 {
         self.dot(x) - self.gap
     }
+
+    /// δ as [`Self::delta`] but summed in four interleaved partial sums (vectorises): differs
+    /// from it by round-off (≲ 30 ε Σ|g_n q_n|), so only for filters whose margin covers that.
+    #[inline(always)]
+    pub fn delta_fast(&self, x: &[f64]) -> f64 {
+        let n = self.g.len();
+        let (g, x) = (&self.g[..n], &x[..n]);
+        let n4 = n / 4 * 4;
+        let mut acc = [0.0f64; 4];
+        for (gc, xc) in g[..n4].chunks_exact(4).zip(x[..n4].chunks_exact(4)) {
+            for k in 0..4 {
+                acc[k] += gc[k] * xc[k];
+            }
+        }
+        for k in n4..n {
+            acc[0] += g[k] * x[k];
+        }
+        (acc[0] + acc[1]) + (acc[2] + acc[3]) - self.gap
+    }
 }
 
 /// Delassus matrix of the contacts `set`.

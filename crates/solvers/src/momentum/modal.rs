@@ -31,10 +31,12 @@ pub struct BuildingModes {
     pub masses: Vec<f64>,
     /// Modes available (= floors) and kept.
     pub available: usize,
-    /// Mode shapes by blocks of [`BLOCK`] floors (zero-padded): `blocks[c * n_modes + m]`
-    /// holds floors `c·BLOCK … c·BLOCK + BLOCK − 1` of mode m (the layout of the
-    /// reconstruction kernel).
-    pub blocks: Vec<[f64; BLOCK]>,
+    /// Mode shapes by tiles of floors (the layout of the reconstruction kernel): the padded
+    /// floors split into tiles of 16, then at most one of 8 and one of 4 (`tile_widths`);
+    /// a tile of width w starting at floor i0 holds, mode after mode, φ_m[i0 … i0 + w − 1]
+    /// (zeros past the last floor).
+    pub tiles: Vec<f64>,
+    pub tile_widths: Vec<usize>,
 }
 
 /// Floors per block of the reconstruction kernel.
@@ -63,30 +65,51 @@ impl BuildingModes {
     }
 
     /// Φ·q for each of the R modal vectors `q` (this building's modes) into `out` (at least
-    /// [`BuildingModes::padded_floors`] long; the padding receives zeros): floors
-    /// in register-held blocks of [`BLOCK`] ([`BuildingModes::blocks`], zero-padded), each
-    /// floor summed over the modes in mode order from 0 (the same sums, in the same order,
-    /// as a plain loop), without bounds checks in the inner loop.
+    /// [`BuildingModes::padded_floors`] long; the padding receives zeros): the floors in
+    /// tiles of 16, 8 or 4 ([`BuildingModes::tiles`]) whose R accumulators stay in registers
+    /// while the mode shapes stream by, each floor summed over the modes in mode order from
+    /// 0 (the same sums, in the same order, as a plain loop), without bounds checks in the
+    /// inner loop.
     #[inline(always)]
     fn reconstruct<const R: usize>(&self, q: [&[f64]; R], out: [&mut [f64]; R]) {
         let nm = q[0].len();
         let q: [&[f64]; R] = std::array::from_fn(|r| &q[r][..nm]);
-        for (c, blk) in self.blocks.chunks_exact(nm).enumerate() {
-            let mut acc = [[0.0f64; BLOCK]; R];
-            for m in 0..nm {
-                let col = &blk[m];
-                for r in 0..R {
-                    let qm = q[r][m];
-                    for k in 0..BLOCK {
-                        acc[r][k] += col[k] * qm;
-                    }
-                }
+        let mut out = out;
+        let (mut i0, mut off) = (0, 0);
+        for &w in &self.tile_widths {
+            let cols = &self.tiles[off..off + w * nm];
+            match w {
+                16 => tile::<16, R>(cols, q, &mut out, i0),
+                8 => tile::<8, R>(cols, q, &mut out, i0),
+                _ => tile::<BLOCK, R>(cols, q, &mut out, i0),
             }
-            let i0 = c * BLOCK;
-            for r in 0..R {
-                out[r][i0..i0 + BLOCK].copy_from_slice(&acc[r]);
+            i0 += w;
+            off += w * nm;
+        }
+    }
+}
+
+/// One tile of W floors starting at floor `i0`: `cols` holds W values per mode, mode after
+/// mode.
+#[inline(always)]
+fn tile<const W: usize, const R: usize>(
+    cols: &[f64],
+    q: [&[f64]; R],
+    out: &mut [&mut [f64]; R],
+    i0: usize,
+) {
+    let mut acc = [[0.0f64; W]; R];
+    for (m, col) in cols.chunks_exact(W).enumerate() {
+        let col: &[f64; W] = col.try_into().unwrap();
+        for r in 0..R {
+            let qm = q[r][m];
+            for k in 0..W {
+                acc[r][k] += col[k] * qm;
             }
         }
+    }
+    for r in 0..R {
+        out[r][i0..i0 + W].copy_from_slice(&acc[r]);
     }
 }
 
@@ -125,25 +148,31 @@ impl Modal {
                 .map(|(k, i)| md.phi[(i, k)])
                 .collect();
             let phi: Vec<f64> = phi;
-            let blocks = (0..nf.div_ceil(BLOCK))
-                .flat_map(|c| (0..n).map(move |k| (c, k)))
-                .map(|(c, k)| {
-                    let mut col = [0.0; BLOCK];
-                    for (j, v) in col.iter_mut().enumerate() {
-                        if c * BLOCK + j < nf {
-                            *v = phi[k * nf + c * BLOCK + j];
-                        }
+            let padded = nf.div_ceil(BLOCK) * BLOCK;
+            let mut tile_widths = vec![16; padded / 16];
+            for w in [8, 4] {
+                if padded % 16 / w % 2 == 1 {
+                    tile_widths.push(w);
+                }
+            }
+            let mut tiles = Vec::with_capacity(padded * n);
+            let mut i0 = 0;
+            for &w in &tile_widths {
+                for k in 0..n {
+                    for i in i0..i0 + w {
+                        tiles.push(if i < nf { phi[k * nf + i] } else { 0.0 });
                     }
-                    col
-                })
-                .collect();
+                }
+                i0 += w;
+            }
             m.buildings.push(BuildingModes {
                 range: start..start + n,
                 n_floors: nf,
                 phi,
                 masses: b.masses.clone(),
                 available: all.n_modes(),
-                blocks,
+                tiles,
+                tile_widths,
             });
         }
         Ok(m)

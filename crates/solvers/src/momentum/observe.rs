@@ -45,56 +45,45 @@ impl Stepper<'_> {
                 // The previous sample was skipped: the rates and values at the interval
                 // start, from its modal state.
                 let (x0, v0) = (&self.interval.x0, &self.interval.v0);
-                bm.to_floors2(x0, v0, &mut self.u_prev[b], &mut self.ud_prev[b]);
+                bm.to_floors2(x0, v0, &mut self.u_prev[b][1..], &mut self.ud_prev[b][1..]);
             }
-            bm.to_floors2(&self.s.x, &self.s.v, &mut self.u[b], &mut self.ud[b]);
-            let (u, ud) = (&self.u[b][..nf], &self.ud[b][..nf]);
-            let (dm, sm, k) = (
-                &mut self.disp_max[b][..nf],
-                &mut self.shear_max[b][..nf],
-                &self.stiffness[b][..nf],
+            bm.to_floors2(
+                &self.s.x,
+                &self.s.v,
+                &mut self.u[b][1..],
+                &mut self.ud[b][1..],
             );
-            let mut raised = false;
-            for i in 0..nf {
-                let d = u[i].abs();
-                raised |= d > dm[i];
-                dm[i] = if d > dm[i] { d } else { dm[i] };
-            }
-            let v0 = (k[0] * u[0]).abs();
-            raised |= v0 > sm[0];
-            sm[0] = if v0 > sm[0] { v0 } else { sm[0] };
-            for i in 1..nf {
-                let vs = (k[i] * (u[i] - u[i - 1])).abs();
-                raised |= vs > sm[i];
-                sm[i] = if vs > sm[i] { vs } else { sm[i] };
-            }
+            let (raised, flagged) = sample(
+                Sample {
+                    u: &self.u[b],
+                    ud: &self.ud[b],
+                    up: &self.u_prev[b],
+                    udp: &self.ud_prev[b],
+                    k: &self.stiffness[b],
+                    disp_lower: &self.disp_lower[b],
+                    shear_lower: &self.shear_lower[b],
+                },
+                &mut self.disp_max[b],
+                &mut self.shear_max[b],
+                &mut self.flags,
+                len,
+            );
             self.env_stale[b] |= raised;
-            if len > 0.0 {
-                // Rates at both ends of the interval: a sign change flags an interior
-                // extremum (rare); the flagged quantities go to the slow path.
-                let (udp, flags) = (&self.ud_prev[b][..nf], &mut self.flags);
-                flags.clear();
+            if flagged {
+                // The rare slow path, in the order floor 0 displacement, story 0 shear,
+                // floor 1 …: the same filter, quantity by quantity.
+                let n = self.disp_max[b].len();
                 for i in 0..nf {
-                    if udp[i] * ud[i] < 0.0 {
-                        flags.push((i, false));
+                    for story in [false, true] {
+                        if self.flags[i + if story { n } else { 0 }] != 0 {
+                            self.interior_extremum(b, i, story, len, &mut stored);
+                        }
                     }
-                    let (vb, vbp) = if i > 0 {
-                        (ud[i - 1], udp[i - 1])
-                    } else {
-                        (0.0, 0.0)
-                    };
-                    if (k[i] * (udp[i] - vbp)) * (k[i] * (ud[i] - vb)) < 0.0 {
-                        flags.push((i, true));
-                    }
-                }
-                for f in 0..self.flags.len() {
-                    let (i, story) = self.flags[f];
-                    self.interior_extremum(b, i, story, len, &mut stored);
                 }
             }
             if self.history.is_some() {
-                self.tracker.observe(b, &self.u[b][..nf]);
-                self.tracker.observe_velocity(b, &self.ud[b][..nf]);
+                self.tracker.observe(b, &self.u[b][1..=nf]);
+                self.tracker.observe_velocity(b, &self.ud[b][1..=nf]);
             }
             // The envelope threshold min_y peak_y/f_y, recomputed when a peak (or a lower
             // bound) has grown: peaks only grow, so an older threshold is a safe one.
@@ -183,6 +172,25 @@ impl Stepper<'_> {
         true
     }
 
+    /// Values and rates (y0, ẏ0, y1, ẏ1) of floor displacement `i` (or story shear `i` if
+    /// `story`) of building `b` at the previous and the current sample: the same arithmetic
+    /// as [`sample`].
+    #[inline]
+    fn ends(&self, b: usize, i: usize, story: bool) -> (f64, f64, f64, f64) {
+        let (u, ud, up, udp) = (&self.u[b], &self.ud[b], &self.u_prev[b], &self.ud_prev[b]);
+        if story {
+            let k = self.stiffness[b][i];
+            (
+                k * (up[i + 1] - up[i]),
+                k * (udp[i + 1] - udp[i]),
+                k * (u[i + 1] - u[i]),
+                k * (ud[i + 1] - ud[i]),
+            )
+        } else {
+            (up[i + 1], udp[i + 1], u[i + 1], ud[i + 1])
+        }
+    }
+
     /// The slow path of one flagged quantity of building `b` (floor displacement `i`, or
     /// story shear `i` if `story`): Hermite estimate h of the interior extremum; a cheap
     /// filter (the Hermite error is a small fraction of the content at the interval's
@@ -198,15 +206,7 @@ impl Stepper<'_> {
         len: f64,
         stored: &mut Option<usize>,
     ) {
-        let (u, ud, up, udp) = (&self.u[b], &self.ud[b], &self.u_prev[b], &self.ud_prev[b]);
-        let (below, below_p, vb, vbp) = if story && i > 0 {
-            (u[i - 1], up[i - 1], ud[i - 1], udp[i - 1])
-        } else {
-            (0.0, 0.0, 0.0, 0.0)
-        };
-        let sc = if story { self.stiffness[b][i] } else { 1.0 };
-        let (y0, yd0) = (sc * (up[i] - below_p), sc * (udp[i] - vbp));
-        let (y1, yd1) = (sc * (u[i] - below), sc * (ud[i] - vb));
+        let (y0, yd0, y1, yd1) = self.ends(b, i, story);
         let (exact, lower) = if story {
             (self.shear_max[b][i], self.shear_lower[b][i])
         } else {
@@ -216,8 +216,7 @@ impl Stepper<'_> {
         // |H| ≤ max(|y0|, |y1|) + 4/27 len (|ẏ0| + |ẏ1|) (the Hermite basis functions of
         // the values are ≥ 0 and sum to 1, those of the slopes are at most 4/27 in size):
         // most flagged extrema are far below the peak and need no Hermite estimate.
-        let cubic_bound = y0.abs().max(y1.abs()) + 4.0 / 27.0 * len * (yd0.abs() + yd1.abs());
-        if cubic_bound * (1.0 + 1e-9) < 0.9 * peak {
+        if cubic_bound(y0, yd0, y1, yd1, 4.0 / 27.0 * len) * (1.0 + 1e-9) < 0.9 * peak {
             return;
         }
         let Some((th, h)) = peaks::hermite_extremum(y0, yd0, y1, yd1, len) else {
@@ -283,6 +282,7 @@ impl Stepper<'_> {
             let (u, ud, up, udp) = (&self.u, &self.ud, &self.u_prev, &self.ud_prev);
             let op = &self.overlaps.pairs[k];
             let (l, i, r, j) = (op.left, op.left_dof, op.right, op.right_dof);
+            let (i, j) = (i + 1, j + 1); // the leading zero of the buffers
             let y1 = u[l][i] - u[r][j];
             self.overlaps.offer(k, t, y1);
             if len <= 0.0 {
@@ -408,4 +408,80 @@ impl Stepper<'_> {
         }
         self.deferred.candidates.clear();
     }
+}
+
+/// max(|y0|, |y1|) + c (|ẏ0| + |ẏ1|), c = 4/27·len: a bound of the cubic Hermite
+/// interpolant of (y, ẏ) over an interval of length len (its value basis functions are ≥ 0
+/// and sum to 1, its slope basis functions are at most 4/27·len in size).
+#[inline(always)]
+fn cubic_bound(y0: f64, yd0: f64, y1: f64, yd1: f64, c: f64) -> f64 {
+    y0.abs().max(y1.abs()) + c * (yd0.abs() + yd1.abs())
+}
+
+/// The sample buffers of one building (leading zero, padded floors; see [`Stepper::u`]).
+struct Sample<'s> {
+    u: &'s [f64],
+    ud: &'s [f64],
+    up: &'s [f64],
+    udp: &'s [f64],
+    k: &'s [f64],
+    disp_lower: &'s [f64],
+    shear_lower: &'s [f64],
+}
+
+/// The sample of one building, branch-free over its (padded) floors so that it vectorises:
+/// the running peaks of |u_i| and |V_i| = |k_i (u_i − u_{i−1})| (`dm`, `sm`), and whether
+/// any quantity needs the slow path of [`Stepper::interior_extremum`] (its rate changes sign
+/// over the interval of length `len` > 0 and the cubic bound reaches 90 % of its peak).
+/// Returns (a peak was raised, a quantity is flagged); `flags` receives one byte per
+/// displacement then one per shear (1: flagged). The padding floors are zeros and never
+/// raise or flag anything.
+#[inline(always)]
+fn sample(
+    s: Sample<'_>,
+    dm: &mut [f64],
+    sm: &mut [f64],
+    flags: &mut [u8],
+    len: f64,
+) -> (bool, bool) {
+    let n = dm.len();
+    let (u, below) = (&s.u[1..=n], &s.u[..n]);
+    let (ud, vbelow) = (&s.ud[1..=n], &s.ud[..n]);
+    let (up, below_p) = (&s.up[1..=n], &s.up[..n]);
+    let (udp, vbelow_p) = (&s.udp[1..=n], &s.udp[..n]);
+    let (k, dl, sl, sm) = (
+        &s.k[..n],
+        &s.disp_lower[..n],
+        &s.shear_lower[..n],
+        &mut sm[..n],
+    );
+    let mut raised = false;
+    for i in 0..n {
+        let d = u[i].abs();
+        raised |= d > dm[i];
+        dm[i] = if d > dm[i] { d } else { dm[i] };
+        let vs = (k[i] * (u[i] - below[i])).abs();
+        raised |= vs > sm[i];
+        sm[i] = if vs > sm[i] { vs } else { sm[i] };
+    }
+    if !(len > 0.0) {
+        return (raised, false);
+    }
+    let c = 4.0 / 27.0 * len;
+    let (fd, fs) = flags[..2 * n].split_at_mut(n);
+    let mut flagged = false;
+    for i in 0..n {
+        let (y0, yd0, y1, yd1) = (up[i], udp[i], u[i], ud[i]);
+        let peak = dm[i].max(dl[i]);
+        let f = (yd0 * yd1 < 0.0) & !(cubic_bound(y0, yd0, y1, yd1, c) * (1.0 + 1e-9) < 0.9 * peak);
+        fd[i] = f as u8;
+        flagged |= f;
+        let (y0, yd0) = (k[i] * (up[i] - below_p[i]), k[i] * (udp[i] - vbelow_p[i]));
+        let (y1, yd1) = (k[i] * (u[i] - below[i]), k[i] * (ud[i] - vbelow[i]));
+        let peak = sm[i].max(sl[i]);
+        let f = (yd0 * yd1 < 0.0) & !(cubic_bound(y0, yd0, y1, yd1, c) * (1.0 + 1e-9) < 0.9 * peak);
+        fs[i] = f as u8;
+        flagged |= f;
+    }
+    (raised, flagged)
 }

@@ -86,6 +86,8 @@ pub struct Stepper<'a> {
     pub(super) pen: Vec<f64>,
     pub(super) xn: Vec<f64>,
     pub(super) vn: Vec<f64>,
+    /// Running peaks per building, floor (story) index, zero-padded to
+    /// [`super::modal::BuildingModes::padded_floors`] (as `stiffness` and the lower bounds).
     pub(super) disp_max: Vec<Vec<f64>>,
     /// Per-mode energy sums of the fast path (input, damping), J; folded in by `finish`.
     pub(super) win_acc: Vec<f64>,
@@ -94,9 +96,12 @@ pub struct Stepper<'a> {
     pub(super) dmp_step: Vec<f64>,
     pub(super) shear_max: Vec<Vec<f64>>,
     pub(super) stiffness: Vec<Vec<f64>>,
-    pub(super) u: Vec<Vec<f64>>,
     pub(super) arcs: Vec<Arc>,
-    /// Floor velocities at the current and at the previous sample, per building.
+    /// Floor displacements and velocities at the current and at the previous sample, per
+    /// building. These four
+    /// buffers hold a leading zero (the ground) before the padded floors: floor i is at
+    /// index i + 1, so `[..P]` is the floor below each floor of `[1..]`.
+    pub(super) u: Vec<Vec<f64>>,
     pub(super) ud: Vec<Vec<f64>>,
     pub(super) u_prev: Vec<Vec<f64>>,
     pub(super) ud_prev: Vec<Vec<f64>>,
@@ -120,9 +125,10 @@ pub struct Stepper<'a> {
     pub(super) overlap_lower: Vec<f64>,
     /// Candidates for the continuous peaks, refined at the end ([`peaks::Deferred`]).
     pub(super) deferred: peaks::Deferred,
-    /// Scratch of the observation: flagged (floor, story?) of one building, and the arcs of
-    /// the interval for the building `arcs_for` (`usize::MAX`: all modes).
-    pub(super) flags: Vec<(usize, bool)>,
+    /// Scratch of the observation: the flags of one building (one byte per floor, then one
+    /// per story, padded; see `observe::sample`), and the arcs of the interval for the
+    /// building `arcs_for` (`usize::MAX`: all modes).
+    pub(super) flags: Vec<u8>,
     pub(super) obs_arcs: Vec<Arc>,
     pub(super) arcs_for: Option<usize>,
     /// Energy envelope of the observation ([`super::observe`]): per building, the inverse
@@ -191,44 +197,52 @@ impl<'a> Stepper<'a> {
             dmp_acc: vec![0.0; nm],
             win_step: vec![0.0; nm],
             dmp_step: vec![0.0; nm],
-            disp_max: scene
+            disp_max: p
+                .modal
                 .buildings
                 .iter()
-                .map(|b| vec![0.0; b.n_floors()])
+                .map(|b| vec![0.0; b.padded_floors()])
                 .collect(),
-            shear_max: scene
+            shear_max: p
+                .modal
                 .buildings
                 .iter()
-                .map(|b| vec![0.0; b.n_floors()])
+                .map(|b| vec![0.0; b.padded_floors()])
                 .collect(),
-            stiffness: scene
+            stiffness: p
+                .modal
                 .buildings
                 .iter()
-                .map(|b| b.story_stiffness.clone())
+                .zip(&scene.buildings)
+                .map(|(bm, bd)| {
+                    let mut k = bd.story_stiffness.clone();
+                    k.resize(bm.padded_floors(), 0.0);
+                    k
+                })
                 .collect(),
             u: p.modal
                 .buildings
                 .iter()
-                .map(|b| vec![0.0; b.padded_floors()])
+                .map(|b| vec![0.0; b.padded_floors() + 1])
                 .collect(),
             arcs: Vec::with_capacity(nm),
             ud: p
                 .modal
                 .buildings
                 .iter()
-                .map(|b| vec![0.0; b.padded_floors()])
+                .map(|b| vec![0.0; b.padded_floors() + 1])
                 .collect(),
             u_prev: p
                 .modal
                 .buildings
                 .iter()
-                .map(|b| vec![0.0; b.padded_floors()])
+                .map(|b| vec![0.0; b.padded_floors() + 1])
                 .collect(),
             ud_prev: p
                 .modal
                 .buildings
                 .iter()
-                .map(|b| vec![0.0; b.padded_floors()])
+                .map(|b| vec![0.0; b.padded_floors() + 1])
                 .collect(),
             interval: peaks::Interval {
                 x0: vec![0.0; nm],
@@ -238,19 +252,30 @@ impl<'a> Stepper<'a> {
             held_force: vec![0.0; p.contacts.len()],
             overlap_rows: Vec::new(),
             overlaps: OverlapTracker::new(scene),
-            disp_lower: scene
+            disp_lower: p
+                .modal
                 .buildings
                 .iter()
-                .map(|b| vec![0.0; b.n_floors()])
+                .map(|b| vec![0.0; b.padded_floors()])
                 .collect(),
-            shear_lower: scene
+            shear_lower: p
+                .modal
                 .buildings
                 .iter()
-                .map(|b| vec![0.0; b.n_floors()])
+                .map(|b| vec![0.0; b.padded_floors()])
                 .collect(),
             overlap_lower: Vec::new(),
             deferred: peaks::Deferred::new(nm),
-            flags: Vec::new(),
+            flags: vec![
+                0;
+                2 * p
+                    .modal
+                    .buildings
+                    .iter()
+                    .map(|b| b.padded_floors())
+                    .max()
+                    .unwrap_or(0)
+            ],
             obs_arcs: Vec::new(),
             arcs_for: None,
             env_inv: Vec::new(),
@@ -377,7 +402,7 @@ impl<'a> Stepper<'a> {
     /// start are the new ones.
     pub(super) fn refresh_rates(&mut self) {
         for (b, bm) in self.p.modal.buildings.iter().enumerate() {
-            bm.to_floors(&self.s.v, &mut self.ud_prev[b]);
+            bm.to_floors(&self.s.v, &mut self.ud_prev[b][1..]);
         }
     }
 
@@ -389,8 +414,8 @@ impl<'a> Stepper<'a> {
             .enumerate()
             .map(|(b, bd)| BuildingResponse {
                 name: bd.name.clone(),
-                story_shear_max: self.shear_max[b].clone(),
-                floor_displacement_max: self.disp_max[b].clone(),
+                story_shear_max: self.shear_max[b][..bd.n_floors()].to_vec(),
+                floor_displacement_max: self.disp_max[b][..bd.n_floors()].to_vec(),
                 ..Default::default()
             })
             .collect()
@@ -558,11 +583,13 @@ impl<'a> Stepper<'a> {
         let sub = p.sub;
         let mut arcs_built = false;
         for (ci, ct) in p.contacts.iter().enumerate() {
-            // δ, δ̇ at the window ends 0, h/sub, …, h.
-            let d_start = ct.delta(&self.s.x);
-            if d_start < -h * p.sqrt_w[ci] * vbound * (1.0 + 1e-9) {
+            // δ, δ̇ at the window ends 0, h/sub, …, h. The skip test uses the vectorised
+            // sum: its round-off (≲ 30 ε |g|·|q|) is far inside the bound's relative margin
+            // of 1e-9 (h·√W·vbound ≥ h ω_min |g|·|q|).
+            if ct.delta_fast(&self.s.x) < -h * p.sqrt_w[ci] * vbound * (1.0 + 1e-9) {
                 continue;
             }
+            let d_start = ct.delta(&self.s.x);
             let mut prev = (d_start, ct.dot(&self.s.v));
             if prev.0 >= 0.0 {
                 return Ok(None);
