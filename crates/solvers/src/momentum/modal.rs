@@ -244,9 +244,10 @@ pub struct StepCoeffs {
     /// coefficients (off-diagonal ones doubled), order 00 01 02 03 11 12 13 22 23 33.
     pub dq: [Vec<f64>; 10],
     /// The same coefficients interleaved by chunks of 4 modes (the fast-step kernel
-    /// [`propagate`]), and the modes past the last full chunk one by one.
+    /// [`propagate`]), the modes past the last full chunk in a last chunk padded with zero
+    /// coefficients (its padding lanes compute zeros and are never read).
     pub blocks: Vec<StepBlock<4>>,
-    pub tail: Vec<StepBlock<1>>,
+    pub tail: Option<StepBlock<4>>,
 }
 
 /// Step coefficients of W consecutive modes, field by field (see [`StepCoeffs`]): a00 a01
@@ -257,13 +258,14 @@ pub struct StepBlock<const W: usize> {
 }
 
 impl<const W: usize> StepBlock<W> {
-    fn gather(c: &StepCoeffs, gamma: &[f64], first: usize) -> Self {
+    /// Modes `first` … `first + count − 1` (count ≤ W; the other lanes zero).
+    fn gather(c: &StepCoeffs, gamma: &[f64], first: usize, count: usize) -> Self {
         let fields: [&[f64]; 11] = [
             &c.a00, &c.a01, &c.a10, &c.a11, &c.b00, &c.b01, &c.b10, &c.b11, &c.two_zw, &c.inv_w2,
             gamma,
         ];
         let mut out = StepBlock { c: [[0.0; W]; 21] };
-        for k in 0..W {
+        for k in 0..count {
             for (f, src) in fields.iter().enumerate() {
                 out.c[f][k] = src[first + k];
             }
@@ -327,7 +329,7 @@ impl StepCoeffs {
             inv_w2: vec![0.0; nm],
             dq: Default::default(),
             blocks: Vec::new(),
-            tail: Vec::new(),
+            tail: None,
         };
         for q in c.dq.iter_mut() {
             *q = vec![0.0; nm];
@@ -370,11 +372,9 @@ impl StepCoeffs {
         }
         let n4 = nm / 4 * 4;
         c.blocks = (0..n4 / 4)
-            .map(|k| StepBlock::gather(&c, &modal.gamma, 4 * k))
+            .map(|k| StepBlock::gather(&c, &modal.gamma, 4 * k, 4))
             .collect();
-        c.tail = (n4..nm)
-            .map(|n| StepBlock::gather(&c, &modal.gamma, n))
-            .collect();
+        c.tail = (n4 < nm).then(|| StepBlock::gather(&c, &modal.gamma, n4, nm - n4));
         c
     }
 }

@@ -30,7 +30,7 @@ impl Stepper<'_> {
     #[inline(always)]
     pub(super) fn observe(&mut self) {
         let len = self.interval.tau_done;
-        self.arcs_for = None;
+        self.amp_valid = false;
         let mut stored: Option<usize> = None;
         let nb = self.p.modal.buildings.len();
         let skip_overlaps = self.envelope(len);
@@ -236,11 +236,11 @@ impl Stepper<'_> {
                 *c = bm.phi[m * nf + i];
             }
         }
-        if self.arcs_for != Some(b) {
-            self.obs_arcs = peaks::arcs(&p.modal, bm.range.clone(), &self.interval);
-            self.arcs_for = Some(b);
+        if !self.amp_valid {
+            peaks::amplitudes(&p.modal, &self.interval, &mut self.obs_amp);
+            self.amp_valid = true;
         }
-        let bound = peaks::hermite_error_bound(&p.modal, first, coef, &self.obs_arcs, len);
+        let bound = peaks::hermite_error_bound(&p.modal, first, coef, &self.obs_amp, len);
         if h.abs() + bound < peak {
             return;
         }
@@ -313,12 +313,12 @@ impl Stepper<'_> {
                 continue;
             }
             let modal = &self.p.modal;
-            if self.arcs_for != Some(usize::MAX) {
-                self.obs_arcs = peaks::arcs(modal, 0..modal.len(), &self.interval);
-                self.arcs_for = Some(usize::MAX);
+            if !self.amp_valid {
+                peaks::amplitudes(modal, &self.interval, &mut self.obs_amp);
+                self.amp_valid = true;
             }
             let c = &self.overlap_rows[k];
-            let bound = peaks::hermite_error_bound(modal, 0, c, &self.obs_arcs, len);
+            let bound = peaks::hermite_error_bound(modal, 0, c, &self.obs_amp, len);
             if h + bound < best {
                 continue;
             }

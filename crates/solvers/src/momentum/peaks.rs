@@ -189,14 +189,37 @@ impl Deferred {
     }
 }
 
+/// The homogeneous amplitudes |A_n − iB_n| of every mode over the interval `iv` into `out`
+/// (the same arithmetic as [`Arc::new`] then [`Arc::amplitude`], without the arcs).
+pub fn amplitudes(modal: &Modal, iv: &Interval, out: &mut Vec<f64>) {
+    out.clear();
+    for n in 0..modal.len() {
+        let extra = iv.fc.as_ref().map_or(0.0, |f| f[n]);
+        let (f0, f1) = (
+            -modal.gamma[n] * iv.a0 + extra,
+            -modal.gamma[n] * iv.a1 + extra,
+        );
+        let (omega, zeta) = (modal.omega[n], modal.zeta[n]);
+        let w2 = omega * omega;
+        let beta = (f1 - f0) / iv.tau / w2;
+        let c = zeta * omega;
+        let alpha = (f0 - 2.0 * c * beta) / w2;
+        let d = omega * (1.0 - zeta * zeta).sqrt();
+        let a = iv.x0[n] - alpha;
+        let b = (iv.v0[n] - beta + c * a) / d;
+        out.push((a * a + b * b).sqrt());
+    }
+}
+
 /// Bound on |y − H| over an interval of length `len`, H the cubic Hermite interpolant of
-/// y = Σ c_m q_m: len⁴/384 · max|y⁗| with |q_m⁗| ≤ ω_m⁴ |A_m − iB_m| (the homogeneous part;
-/// the particular part is linear in time).
-pub fn hermite_error_bound(modal: &Modal, first: usize, c: &[f64], arcs: &[Arc], len: f64) -> f64 {
+/// y = Σ c_m q_{first+m}: len⁴/384 · max|y⁗| with |q_m⁗| ≤ ω_m⁴ |A_m − iB_m| (the
+/// homogeneous part, amplitudes `amp` of all modes from [`amplitudes`]; the particular
+/// part is linear in time).
+pub fn hermite_error_bound(modal: &Modal, first: usize, c: &[f64], amp: &[f64], len: f64) -> f64 {
     let mut d4 = 0.0;
-    for (m, (cm, a)) in c.iter().zip(arcs).enumerate() {
+    for (m, (cm, a)) in c.iter().zip(&amp[first..]).enumerate() {
         let w2 = modal.omega[first + m] * modal.omega[first + m];
-        d4 += cm.abs() * w2 * w2 * a.amplitude();
+        d4 += cm.abs() * w2 * w2 * a;
     }
     len.powi(4) / 384.0 * d4
 }

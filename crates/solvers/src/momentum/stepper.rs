@@ -126,11 +126,11 @@ pub struct Stepper<'a> {
     /// Candidates for the continuous peaks, refined at the end ([`peaks::Deferred`]).
     pub(super) deferred: peaks::Deferred,
     /// Scratch of the observation: the flags of one building (one byte per floor, then one
-    /// per story, padded; see `observe::sample`), and the arcs of the interval for the
-    /// building `arcs_for` (`usize::MAX`: all modes).
+    /// per story, padded; see `observe::sample`), and the homogeneous amplitudes of every
+    /// mode over the interval (for the Hermite error bounds; valid if `amp_valid`).
     pub(super) flags: Vec<u8>,
-    pub(super) obs_arcs: Vec<Arc>,
-    pub(super) arcs_for: Option<usize>,
+    pub(super) obs_amp: Vec<f64>,
+    pub(super) amp_valid: bool,
     /// Energy envelope of the observation ([`super::observe`]): per building, the inverse
     /// flexibility norms 1/f_y of its floor displacements then story shears
     /// (f_y = √(Σ_n c_n²/ω_n²), m/√J resp. N/√J), ‖Γ_b‖ (kg^½), the envelope threshold
@@ -276,8 +276,8 @@ impl<'a> Stepper<'a> {
                     .max()
                     .unwrap_or(0)
             ],
-            obs_arcs: Vec::new(),
-            arcs_for: None,
+            obs_amp: Vec::with_capacity(nm),
+            amp_valid: false,
             env_inv: Vec::new(),
             env_gamma: p
                 .modal
@@ -528,8 +528,8 @@ impl<'a> Stepper<'a> {
         let (a0, a1) = (p.ag_start[j], p.ag_end[j]);
         let h = p.full.h;
         {
-            // Modes in chunks of 4 (coefficients interleaved per chunk, the tail one mode at
-            // a time): fixed-width arithmetic without bounds checks, which vectorises.
+            // Modes in chunks of 4 (coefficients interleaved per chunk, the tail in a padded
+            // chunk): fixed-width arithmetic without bounds checks, which vectorises.
             let c = &p.full;
             let nm = self.s.x.len();
             let n4 = nm / 4 * 4;
@@ -551,9 +551,15 @@ impl<'a> Stepper<'a> {
                 win[r.clone()].copy_from_slice(&out[2]);
                 dmp[r].copy_from_slice(&out[3]);
             }
-            for n in n4..nm {
-                let out = super::modal::propagate::<1>(&c.tail[n - n4], [x[n]], [v[n]], a0, a1, h);
-                (xn[n], vn[n], win[n], dmp[n]) = (out[0][0], out[1][0], out[2][0], out[3][0]);
+            if let Some(tail) = &c.tail {
+                let (mut xt, mut vt) = ([0.0; 4], [0.0; 4]);
+                xt[..nm - n4].copy_from_slice(&x[n4..]);
+                vt[..nm - n4].copy_from_slice(&v[n4..]);
+                let out = super::modal::propagate::<4>(tail, xt, vt, a0, a1, h);
+                xn[n4..].copy_from_slice(&out[0][..nm - n4]);
+                vn[n4..].copy_from_slice(&out[1][..nm - n4]);
+                win[n4..].copy_from_slice(&out[2][..nm - n4]);
+                dmp[n4..].copy_from_slice(&out[3][..nm - n4]);
             }
         }
         // Rigorous skip of far contacts: d√(2E)/dt ≤ |f| (modal load norm), so over the step
