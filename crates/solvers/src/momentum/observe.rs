@@ -30,7 +30,7 @@ impl Stepper<'_> {
     #[inline(always)]
     pub(super) fn observe(&mut self) {
         let len = self.interval.tau_done;
-        self.amp_valid = false;
+        self.amp_valid.fill(false);
         let mut stored: Option<usize> = None;
         let nb = self.p.modal.buildings.len();
         let skip_overlaps = self.envelope(len);
@@ -236,9 +236,10 @@ impl Stepper<'_> {
                 *c = bm.phi[m * nf + i];
             }
         }
-        if !self.amp_valid {
-            peaks::amplitudes(&p.modal, &self.interval, &mut self.obs_amp);
-            self.amp_valid = true;
+        if !self.amp_valid[b] {
+            let r = bm.range.clone();
+            peaks::amplitudes(&p.modal, &self.amp_k, r, &self.interval, &mut self.obs_amp);
+            self.amp_valid[b] = true;
         }
         let bound = peaks::hermite_error_bound(&p.modal, first, coef, &self.obs_amp, len);
         if h.abs() + bound < peak {
@@ -313,9 +314,12 @@ impl Stepper<'_> {
                 continue;
             }
             let modal = &self.p.modal;
-            if !self.amp_valid {
-                peaks::amplitudes(modal, &self.interval, &mut self.obs_amp);
-                self.amp_valid = true;
+            for b in [l, r] {
+                if !self.amp_valid[b] {
+                    let range = modal.buildings[b].range.clone();
+                    peaks::amplitudes(modal, &self.amp_k, range, &self.interval, &mut self.obs_amp);
+                    self.amp_valid[b] = true;
+                }
             }
             let c = &self.overlap_rows[k];
             let bound = peaks::hermite_error_bound(modal, 0, c, &self.obs_amp, len);

@@ -189,25 +189,45 @@ impl Deferred {
     }
 }
 
-/// The homogeneous amplitudes |A_n − iB_n| of every mode over the interval `iv` into `out`
-/// (the same arithmetic as [`Arc::new`] then [`Arc::amplitude`], without the arcs).
-pub fn amplitudes(modal: &Modal, iv: &Interval, out: &mut Vec<f64>) {
-    out.clear();
-    for n in 0..modal.len() {
+/// Per-mode constants of [`amplitudes`]: 1/ω², ζω, 1/ω_d.
+pub fn amplitude_constants(modal: &Modal) -> Vec<[f64; 3]> {
+    (0..modal.len())
+        .map(|n| {
+            let (omega, zeta) = (modal.omega[n], modal.zeta[n]);
+            [
+                1.0 / (omega * omega),
+                zeta * omega,
+                1.0 / (omega * (1.0 - zeta * zeta).sqrt()),
+            ]
+        })
+        .collect()
+}
+
+/// The homogeneous amplitudes |A_n − iB_n| of the modes `range` over the interval `iv` into
+/// `out[range]` ([`Arc::amplitude`] without the arcs; `k` from [`amplitude_constants`]):
+/// A = q₀ − α, B = (q̇₀ − β + ζωA)/ω_d with β = (f₁ − f₀)/(τω²), α = (f₀ − 2ζωβ)/ω². The
+/// products by reciprocals round differently from the arcs' divisions: these amplitudes
+/// feed error bounds only.
+pub fn amplitudes(
+    modal: &Modal,
+    k: &[[f64; 3]],
+    range: std::ops::Range<usize>,
+    iv: &Interval,
+    out: &mut [f64],
+) {
+    let inv_tau = 1.0 / iv.tau;
+    for n in range {
         let extra = iv.fc.as_ref().map_or(0.0, |f| f[n]);
         let (f0, f1) = (
             -modal.gamma[n] * iv.a0 + extra,
             -modal.gamma[n] * iv.a1 + extra,
         );
-        let (omega, zeta) = (modal.omega[n], modal.zeta[n]);
-        let w2 = omega * omega;
-        let beta = (f1 - f0) / iv.tau / w2;
-        let c = zeta * omega;
-        let alpha = (f0 - 2.0 * c * beta) / w2;
-        let d = omega * (1.0 - zeta * zeta).sqrt();
+        let [inv_w2, c, inv_d] = k[n];
+        let beta = (f1 - f0) * inv_tau * inv_w2;
+        let alpha = (f0 - 2.0 * c * beta) * inv_w2;
         let a = iv.x0[n] - alpha;
-        let b = (iv.v0[n] - beta + c * a) / d;
-        out.push((a * a + b * b).sqrt());
+        let b = (iv.v0[n] - beta + c * a) * inv_d;
+        out[n] = (a * a + b * b).sqrt();
     }
 }
 

@@ -127,10 +127,12 @@ pub struct Stepper<'a> {
     pub(super) deferred: peaks::Deferred,
     /// Scratch of the observation: the flags of one building (one byte per floor, then one
     /// per story, padded; see `observe::sample`), and the homogeneous amplitudes of every
-    /// mode over the interval (for the Hermite error bounds; valid if `amp_valid`).
+    /// mode over the interval (for the Hermite error bounds; building b's modes valid if
+    /// `amp_valid[b]`) with their per-mode constants.
     pub(super) flags: Vec<u8>,
     pub(super) obs_amp: Vec<f64>,
-    pub(super) amp_valid: bool,
+    pub(super) amp_valid: Vec<bool>,
+    pub(super) amp_k: Vec<[f64; 3]>,
     /// Energy envelope of the observation ([`super::observe`]): per building, the inverse
     /// flexibility norms 1/f_y of its floor displacements then story shears
     /// (f_y = √(Σ_n c_n²/ω_n²), m/√J resp. N/√J), ‖Γ_b‖ (kg^½), the envelope threshold
@@ -276,8 +278,9 @@ impl<'a> Stepper<'a> {
                     .max()
                     .unwrap_or(0)
             ],
-            obs_amp: Vec::with_capacity(nm),
-            amp_valid: false,
+            obs_amp: vec![0.0; nm],
+            amp_valid: vec![false; p.modal.buildings.len()],
+            amp_k: peaks::amplitude_constants(&p.modal),
             env_inv: Vec::new(),
             env_gamma: p
                 .modal
