@@ -279,24 +279,41 @@ impl Stepper<'_> {
     #[inline(always)]
     fn observe_overlaps(&mut self, len: f64, stored: &mut Option<usize>) {
         let t = self.s.t;
+        // First pass, every pair: the sample (a running maximum, branch-free) and whether the
+        // rate turns from + to − over the interval (rare: only those go on).
+        let mut turns = false;
+        {
+            let (u, ud, udp) = (&self.u, &self.ud, &self.ud_prev);
+            let ov = &mut self.overlaps;
+            let (max, time) = (&mut ov.max[..], &mut ov.time[..]);
+            for (k, op) in ov.pairs.iter().enumerate() {
+                let (l, i, r, j) = (op.left, op.left_dof + 1, op.right, op.right_dof + 1);
+                let y1 = u[l][i] - u[r][j];
+                let up = y1 > max[k];
+                max[k] = if up { y1 } else { max[k] };
+                time[k] = if up { t } else { time[k] };
+                let turn = (udp[l][i] - udp[r][j] > 0.0) & (ud[l][i] - ud[r][j] < 0.0);
+                self.flags[k] = turn as u8;
+                turns |= turn;
+            }
+        }
+        if !(len > 0.0) || !turns {
+            return;
+        }
         for k in 0..self.overlaps.pairs.len() {
+            if self.flags[k] == 0 {
+                continue;
+            }
             let (u, ud, up, udp) = (&self.u, &self.ud, &self.u_prev, &self.ud_prev);
             let op = &self.overlaps.pairs[k];
             let (l, i, r, j) = (op.left, op.left_dof, op.right, op.right_dof);
             let (i, j) = (i + 1, j + 1); // the leading zero of the buffers
             let y1 = u[l][i] - u[r][j];
-            self.overlaps.offer(k, t, y1);
-            if len <= 0.0 {
-                continue;
-            }
             let (y0, yd0, yd1) = (
                 up[l][i] - up[r][j],
                 udp[l][i] - udp[r][j],
                 ud[l][i] - ud[r][j],
             );
-            if yd0 <= 0.0 || yd1 >= 0.0 {
-                continue;
-            }
             let best = self.overlaps.max[k].max(self.overlap_lower[k]);
             // H ≤ max(y0, y1) + 4/27 len (|ẏ0| + |ẏ1|) (see `interior_extremum`), and the
             // filter below drops h < best/1.1 (best > 0) or h < best/0.9 (best ≤ 0).
@@ -460,6 +477,7 @@ fn sample(
         &mut sm[..n],
     );
     let mut raised = false;
+    let mut turns = false;
     for i in 0..n {
         let d = u[i].abs();
         raised |= d > dm[i];
@@ -467,8 +485,11 @@ fn sample(
         let vs = (k[i] * (u[i] - below[i])).abs();
         raised |= vs > sm[i];
         sm[i] = if vs > sm[i] { vs } else { sm[i] };
+        // A rate that changes sign over the interval (rare): the filter below runs only then.
+        let (r0, r1) = (k[i] * (udp[i] - vbelow_p[i]), k[i] * (ud[i] - vbelow[i]));
+        turns |= (udp[i] * ud[i] < 0.0) | (r0 * r1 < 0.0);
     }
-    if !(len > 0.0) {
+    if !(len > 0.0) || !turns {
         return (raised, false);
     }
     let c = 4.0 / 27.0 * len;

@@ -126,7 +126,7 @@ pub struct Stepper<'a> {
     /// Candidates for the continuous peaks, refined at the end ([`peaks::Deferred`]).
     pub(super) deferred: peaks::Deferred,
     /// Scratch of the observation: the flags of one building (one byte per floor, then one
-    /// per story, padded; see `observe::sample`), and the homogeneous amplitudes of every
+    /// per story, padded; see `observe::sample`) or of the overlap pairs, and the homogeneous amplitudes of every
     /// mode over the interval (for the Hermite error bounds; building b's modes valid if
     /// `amp_valid[b]`) with their per-mode constants.
     pub(super) flags: Vec<u8>,
@@ -268,16 +268,7 @@ impl<'a> Stepper<'a> {
                 .collect(),
             overlap_lower: Vec::new(),
             deferred: peaks::Deferred::new(nm),
-            flags: vec![
-                0;
-                2 * p
-                    .modal
-                    .buildings
-                    .iter()
-                    .map(|b| b.padded_floors())
-                    .max()
-                    .unwrap_or(0)
-            ],
+            flags: Vec::new(),
             obs_amp: vec![0.0; nm],
             amp_valid: vec![false; p.modal.buildings.len()],
             amp_k: peaks::amplitude_constants(&p.modal),
@@ -345,6 +336,8 @@ impl<'a> Stepper<'a> {
             })
             .collect();
         st.overlap_lower = vec![f64::NEG_INFINITY; st.overlaps.pairs.len()];
+        let widest = p.modal.buildings.iter().map(|b| b.padded_floors()).max();
+        st.flags = vec![0; (2 * widest.unwrap_or(0)).max(st.overlaps.pairs.len())];
         let w2 = &p.omega2;
         let inv_f = |c: &[f64], first: usize| {
             let f2: f64 = c
