@@ -31,12 +31,12 @@
 //!   program reports them (between steps Newmark has no interpolant of its own accuracy,
 //!   so these are not continuous maxima). History: every step.
 //!
-//! Shape: [`NewmarkStepper::step`] takes one step and reports a [`StepOutcome`]:
+//! Shape: `NewmarkStepper::step` takes one step and reports a `StepOutcome` (`crate::step`):
 //! `Accepted`, `ContactsChanged` (the contacts that began or stopped carrying force in the
 //! step, judged from its converged end state), or `Finished` once the duration is covered;
-//! the driver [`run`] owns the loop, the response tracker, the history and the overlap
+//! the driver `run` owns the loop, the response tracker, the history and the overlap
 //! audit. The contact books (modes, episodes, impacts, impact-rate guard) are the
-//! [`super::ledger::ContactLedger`] shared with the adaptive integrator.
+//! `ledger::ContactLedger` shared with the adaptive integrator.
 
 use nalgebra::{DMatrix, DVector};
 use structure::Scene;
@@ -110,6 +110,9 @@ struct NewmarkStepper<'a> {
     on: Vec<bool>,
     visited: Vec<Vec<bool>>,
     force_closed: Vec<f64>,
+    /// The contacts that closed and opened in the last step.
+    closed_now: Vec<usize>,
+    opened_now: Vec<usize>,
     /// Steps taken, and the number of steps that cover the duration.
     step: u64,
     nsteps: u64,
@@ -308,6 +311,8 @@ impl<'a> NewmarkStepper<'a> {
             on,
             visited,
             force_closed,
+            closed_now: Vec::with_capacity(nc),
+            opened_now: Vec::with_capacity(nc),
             step: 0,
             nsteps,
             initial,
@@ -586,9 +591,8 @@ impl<'a> NewmarkStepper<'a> {
             });
         }
 
-        let outcome = self.accept(t1, ag1)?;
         self.step += 1;
-        Ok(outcome)
+        self.accept(t1, ag1)
     }
 
     /// Books a converged step ending at `t1` (s; ground acceleration `ag1`, m/s²): the
@@ -623,6 +627,8 @@ impl<'a> NewmarkStepper<'a> {
             zero,
             f_new,
             vc_trial,
+            closed_now,
+            opened_now,
             ..
         } = self;
         // Energy (trapezoidal sums).
@@ -632,7 +638,8 @@ impl<'a> NewmarkStepper<'a> {
             vbar[i] = 0.5 * (v[i] + v_new[i]);
         }
         e_damp += dt * sys.internal(linear_stories, zero, vbar, f);
-        let (mut closed, mut opened) = (Vec::new(), Vec::new());
+        closed_now.clear();
+        opened_now.clear();
         for ci in 0..nc {
             let (d0, _) = kin(u, v, ci);
             let (d1, dd1) = kin(u_new, v_new, ci);
@@ -652,7 +659,7 @@ impl<'a> NewmarkStepper<'a> {
                 stats.impacts += 1;
                 stats.events += 1;
                 ledger.close_at(ci, t1, vc_trial[ci], episode)?;
-                closed.push(ci);
+                closed_now.push(ci);
             }
             if now {
                 let ep = ledger.episode_mut(ci);
@@ -662,7 +669,7 @@ impl<'a> NewmarkStepper<'a> {
             if !now && ledger.closed(ci) {
                 ledger.open(ci, t1, dd1, impulse[ci]);
                 stats.events += 1;
-                opened.push(ci);
+                opened_now.push(ci);
             }
             force[ci] = f_new[ci];
         }
@@ -675,10 +682,13 @@ impl<'a> NewmarkStepper<'a> {
         self.e_in = e_in;
         self.e_damp = e_damp;
         self.e_work = e_work;
-        Ok(if closed.is_empty() && opened.is_empty() {
+        Ok(if closed_now.is_empty() && opened_now.is_empty() {
             StepOutcome::Accepted
         } else {
-            StepOutcome::ContactsChanged { closed, opened }
+            StepOutcome::ContactsChanged {
+                closed: closed_now.clone(),
+                opened: opened_now.clone(),
+            }
         })
     }
 
