@@ -1,26 +1,38 @@
 //! What one step of a time stepper did: the [`StepOutcome`] shared by the gap element's
-//! integrators ([`crate::gap::adaptive`], [`crate::gap::newmark`]).
+//! integrators ([`crate::gap::adaptive`], [`crate::gap::newmark`]) and the impulse method
+//! ([`crate::impulse`]).
 //!
 //! The shape (issue 10): a stepper owns the integration state and advances it by one step,
 //! reporting what happened; one driver per solver owns the loop (over the record intervals,
 //! or over the fixed steps), the response tracker (peaks, samples, history) and the overlap
-//! audit, and reacts to the outcome: nothing moved (rejected step), a plain step, a record
-//! point reached, an event (the state there is sampled), the end of the analysis. The momentum method's `momentum::Step` is the same idea over its
-//! exact modal segments.
+//! audit, and reacts to the outcome: nothing moved (a rejected step, or a release at the
+//! step start), a plain step, a record point reached, an event (the state there is
+//! sampled), the end of the analysis. The momentum method's `momentum::Step` is the same
+//! idea over its exact modal segments (kept apart: its segments, impacts and persistent
+//! phases are its own).
+//!
+//! One enum for the three steppers rather than one each: most variants are shared, and the
+//! few a stepper never reports are `unreachable!` in its driver. The contacts of an event
+//! are one located contact (adaptive: events are located one at a time), a set
+//! (impulse: closures within the simultaneity window are resolved together) or two sets
+//! (Newmark judges every contact from the step's end state, so in one step some may close
+//! while others open).
 //!
 //! Which stepper reports which outcome:
 //!
-//! | outcome | adaptive | Newmark |
-//! |---|---|---|
-//! | `Rejected` | error test failed | – |
-//! | `Accepted`, `Breakpoint` | ✓ | `Accepted` (no contact changed) |
-//! | `ContactClosed` | located closure | – |
-//! | `ContactOpened` | located opening | – |
-//! | `StoryKink` | located kink | – (kinks not located) |
-//! | `ContactsChanged` | – | closures and openings of the step |
-//! | `Finished` | – | the last step was taken before the call |
+//! | outcome | adaptive | Newmark | impulse |
+//! |---|---|---|---|
+//! | `Rejected` | error test failed | – | error test failed |
+//! | `Accepted`, `Breakpoint` | ✓ | `Accepted` (no contact changed) | ✓ |
+//! | `ContactClosed` | located closure | – | – |
+//! | `ContactOpened` | located opening | – | located release of a held contact |
+//! | `StoryKink` | located kink | – (kinks not located) | located kink |
+//! | `Impact` | – | – | located closures, resolved by the impact law |
+//! | `Released` | – | – | a held contact released at the step start |
+//! | `ContactsChanged` | – | closures and openings of the step | – |
+//! | `Finished` | – | the last step was taken before the call | – |
 //!
-//! The adaptive driver owns the record points and stops after the last one; the
+//! The adaptive and impulse drivers own the record points and stop after the last one; the
 //! Newmark stepper counts its fixed steps and says when they are done.
 
 /// What one call of a stepper's `step` did. `breakpoint`: the step ended on the record
@@ -42,6 +54,17 @@ pub(crate) enum StepOutcome {
     /// The step was cut at a story kink (yield or unloading) before any contact event; the
     /// stories were committed there.
     StoryKink { breakpoint: bool },
+    /// The impulse method: the step was cut where `contacts` close (within the simultaneity
+    /// window of each other) and the impact law resolved them (impulses, contacts joining
+    /// the held set, grazes).
+    Impact {
+        contacts: Vec<usize>,
+        breakpoint: bool,
+    },
+    /// The impulse method: the holding force of held contact `contact` was already tensile
+    /// at the step start; it was released there and no step was taken (the state did not
+    /// move).
+    Released { contact: usize },
     /// A fixed step (Newmark) in which contacts changed state, judged at its end: `closed`
     /// began carrying force, `opened` stopped (either may be empty, not both).
     ContactsChanged {
@@ -58,12 +81,14 @@ impl StepOutcome {
         match self {
             StepOutcome::Rejected
             | StepOutcome::Accepted
+            | StepOutcome::Released { .. }
             | StepOutcome::ContactsChanged { .. }
             | StepOutcome::Finished => false,
             StepOutcome::Breakpoint => true,
             StepOutcome::ContactClosed { breakpoint, .. }
             | StepOutcome::ContactOpened { breakpoint, .. }
-            | StepOutcome::StoryKink { breakpoint } => *breakpoint,
+            | StepOutcome::StoryKink { breakpoint }
+            | StepOutcome::Impact { breakpoint, .. } => *breakpoint,
         }
     }
 }

@@ -788,9 +788,10 @@ pub(crate) fn run_from(
                     tracker.sample(stepper.t(), history.as_deref_mut());
                 }
             }
-            StepOutcome::ContactsChanged { .. } | StepOutcome::Finished => {
-                unreachable!("not an outcome of the adaptive stepper")
-            }
+            StepOutcome::Impact { .. }
+            | StepOutcome::Released { .. }
+            | StepOutcome::ContactsChanged { .. }
+            | StepOutcome::Finished => unreachable!("not an outcome of the adaptive stepper"),
         }
         if outcome.at_breakpoint() {
             stepper.observe(&mut tracker, keep);
