@@ -19,6 +19,7 @@ pub mod output;
 pub mod overlap;
 pub mod response;
 pub mod rules;
+pub(crate) mod step;
 
 pub use output::{
     BuildingResponse, ContactFlexibility, EnergyAudit, History, Impact, Overlap, PersistentContact,

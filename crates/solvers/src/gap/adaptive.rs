@@ -46,6 +46,7 @@ use super::stories::{Kink, Stories};
 use super::{audit, output, ContactLedger, Episode, Mode, Segment, System};
 use crate::output::EnergyAudit;
 use crate::response::ResponseTracker;
+use crate::step::StepOutcome;
 use crate::{History, Impact, RunOutput, SolverError, Stats};
 
 /// Samples per step for the event search.
@@ -193,38 +194,6 @@ pub(crate) fn run(
     history: Option<&mut History>,
 ) -> Result<RunOutput, SolverError> {
     run_from(scene, sys, history, None)
-}
-
-/// What one call of [`GapStepper::step`] did. `breakpoint`: the step ended on the record
-/// point it was given.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) enum StepOutcome {
-    /// The trial step failed the error test: nothing moved, the next try is shorter.
-    Rejected,
-    /// The whole step was taken, ending inside the record interval.
-    Accepted,
-    /// The whole step was taken and ended on the record point.
-    Breakpoint,
-    /// The step was cut at (or ended with) the closure of contact `contact`.
-    ContactClosed { contact: usize, breakpoint: bool },
-    /// The step was cut at (or ended with) the opening of contact `contact`.
-    ContactOpened { contact: usize, breakpoint: bool },
-    /// The step was cut at a story kink (yield or unloading) before any contact event; the
-    /// stories were committed there.
-    StoryKink { breakpoint: bool },
-}
-
-impl StepOutcome {
-    /// Whether the step ended on the record point.
-    pub fn at_breakpoint(self) -> bool {
-        match self {
-            StepOutcome::Rejected | StepOutcome::Accepted => false,
-            StepOutcome::Breakpoint => true,
-            StepOutcome::ContactClosed { breakpoint, .. }
-            | StepOutcome::ContactOpened { breakpoint, .. }
-            | StepOutcome::StoryKink { breakpoint } => breakpoint,
-        }
-    }
 }
 
 /// The accepted part of a step, shown to the driver before the state moves on (continuous
@@ -819,6 +788,10 @@ pub(crate) fn run_from(
                     tracker.sample(stepper.t(), history.as_deref_mut());
                 }
             }
+            StepOutcome::Impact { .. }
+            | StepOutcome::Released { .. }
+            | StepOutcome::ContactsChanged { .. }
+            | StepOutcome::Finished => unreachable!("not an outcome of the adaptive stepper"),
         }
         if outcome.at_breakpoint() {
             stepper.observe(&mut tracker, keep);

@@ -27,11 +27,16 @@
 //!   recoverable story energy from the committed story state (trapezoidal
 //!   sums, exact for the linear part of the scheme, so the balance error is the energy the
 //!   scheme creates or destroys at the contacts).
-//! - Peak responses are taken where the event-driven solvers take them: at the record's
-//!   sample instants (when the record step is a whole number of Newmark steps; otherwise at
-//!   every step) and at the steps where a contact closes or opens. Sampling every step
-//!   would report peaks between record instants, up to ~1 % above the record-instant peaks
-//!   on the paper scene, a difference of sampling, not of integration. History: every step.
+//! - Peak responses and the overlap audit are taken at every step, as a finite-element
+//!   program reports them (between steps Newmark has no interpolant of its own accuracy,
+//!   so these are not continuous maxima). History: every step.
+//!
+//! Shape: `NewmarkStepper::step` takes one step and reports a `StepOutcome` (`crate::step`):
+//! `Accepted`, `ContactsChanged` (the contacts that began or stopped carrying force in the
+//! step, judged from its converged end state), or `Finished` once the duration is covered;
+//! the driver `run` owns the loop, the response tracker, the history and the overlap
+//! audit. The contact books (modes, episodes, impacts, impact-rate guard) are the
+//! `ledger::ContactLedger` shared with the adaptive integrator.
 
 use nalgebra::{DMatrix, DVector};
 use structure::Scene;
@@ -39,6 +44,7 @@ use structure::Scene;
 use super::{audit, output, ContactLedger, Episode, System};
 use crate::output::EnergyAudit;
 use crate::response::ResponseTracker;
+use crate::step::StepOutcome;
 use crate::{History, Impact, RunOutput, SolverError, Stats};
 
 const MAX_NEWTON: usize = 50;
@@ -56,8 +62,9 @@ pub fn steps_and_step(scene: &Scene) -> (u64, f64) {
 /// The fixed-step Newmark integrator between two steps: the effective-stiffness block
 /// inverses and Z = A⁻¹W (linear and in use), the state (u, v, a) with the committed story
 /// state, the contact forces and impulses, the contact ledger, the energy sums and the
-/// statistics. [`NewmarkStepper::step`] advances by Δt; the driver [`run`] owns the loop,
-/// the response tracker, the history and the overlap audit.
+/// statistics. [`NewmarkStepper::step`] advances by Δt and reports a [`StepOutcome`]
+/// (accepted, contacts changed, finished); the driver [`run`] owns the loop, the response
+/// tracker, the history and the overlap audit.
 struct NewmarkStepper<'a> {
     sys: &'a System,
     /// Step, s, and the Newmark constants 4/Δt² (1/s²) and 2/Δt (1/s).
@@ -103,8 +110,12 @@ struct NewmarkStepper<'a> {
     on: Vec<bool>,
     visited: Vec<Vec<bool>>,
     force_closed: Vec<f64>,
-    /// Steps taken.
+    /// The contacts that closed and opened in the last step.
+    closed_now: Vec<usize>,
+    opened_now: Vec<usize>,
+    /// Steps taken, and the number of steps that cover the duration.
     step: u64,
+    nsteps: u64,
     /// Initial energy (mechanical + stored in closed contacts), J; stored at t = 0, J.
     initial: f64,
     stored0: f64,
@@ -141,8 +152,8 @@ fn frozen(c: &super::ContactDof, on: bool, d: f64, dd: f64, vc: f64) -> (f64, f6
 
 impl<'a> NewmarkStepper<'a> {
     /// The factorised effective stiffness, the initial state and acceleration (contacts
-    /// carrying force at t = 0 open their episodes), and the number of steps.
-    fn new(scene: &Scene, sys: &'a System) -> Result<(Self, u64), SolverError> {
+    /// carrying force at t = 0 open their episodes) and the number of steps.
+    fn new(scene: &Scene, sys: &'a System) -> Result<Self, SolverError> {
         let n = sys.n;
         let nc = sys.contacts.len();
         let (nsteps, dt) = steps_and_step(scene);
@@ -300,17 +311,31 @@ impl<'a> NewmarkStepper<'a> {
             on,
             visited,
             force_closed,
+            closed_now: Vec::with_capacity(nc),
+            opened_now: Vec::with_capacity(nc),
             step: 0,
+            nsteps,
             initial,
             stored0,
         };
-        Ok((stepper, nsteps))
+        Ok(stepper)
+    }
+
+    /// Time reached, s.
+    fn t(&self) -> f64 {
+        self.step as f64 * self.dt
     }
 
     /// One Newmark step: active-set iteration on the contact states around Newton solves,
     /// then the energy sums, the contact ledger (closures and openings of the step) and the
-    /// committed story state. Returns the time reached, s.
-    fn step(&mut self) -> Result<f64, SolverError> {
+    /// committed story state. Reports [`StepOutcome::Accepted`], or
+    /// [`StepOutcome::ContactsChanged`] with the contacts that closed and opened in the step,
+    /// or [`StepOutcome::Finished`] (nothing done) once the duration is covered. Errors:
+    /// a non-finite residual, Newton or the contact update failing, the impact-rate guard.
+    fn step(&mut self) -> Result<StepOutcome, SolverError> {
+        if self.step == self.nsteps {
+            return Ok(StepOutcome::Finished);
+        }
         let sys = self.sys;
         let n = sys.n;
         let nc = sys.contacts.len();
@@ -566,15 +591,15 @@ impl<'a> NewmarkStepper<'a> {
             });
         }
 
-        self.accept(t1, ag1)?;
         self.step += 1;
-        Ok(t1)
+        self.accept(t1, ag1)
     }
 
     /// Books a converged step ending at `t1` (s; ground acceleration `ag1`, m/s²): the
     /// energy sums (trapezoidal), the contact impulses and the ledger (closures, episode
-    /// peaks, openings); then the state and the committed stories move on.
-    fn accept(&mut self, t1: f64, ag1: f64) -> Result<(), SolverError> {
+    /// peaks, openings); then the state and the committed stories move on. Returns what the
+    /// contacts did in the step.
+    fn accept(&mut self, t1: f64, ag1: f64) -> Result<StepOutcome, SolverError> {
         let sys = self.sys;
         let n = sys.n;
         let nc = sys.contacts.len();
@@ -602,6 +627,8 @@ impl<'a> NewmarkStepper<'a> {
             zero,
             f_new,
             vc_trial,
+            closed_now,
+            opened_now,
             ..
         } = self;
         // Energy (trapezoidal sums).
@@ -611,6 +638,8 @@ impl<'a> NewmarkStepper<'a> {
             vbar[i] = 0.5 * (v[i] + v_new[i]);
         }
         e_damp += dt * sys.internal(linear_stories, zero, vbar, f);
+        closed_now.clear();
+        opened_now.clear();
         for ci in 0..nc {
             let (d0, _) = kin(u, v, ci);
             let (d1, dd1) = kin(u_new, v_new, ci);
@@ -630,6 +659,7 @@ impl<'a> NewmarkStepper<'a> {
                 stats.impacts += 1;
                 stats.events += 1;
                 ledger.close_at(ci, t1, vc_trial[ci], episode)?;
+                closed_now.push(ci);
             }
             if now {
                 let ep = ledger.episode_mut(ci);
@@ -639,6 +669,7 @@ impl<'a> NewmarkStepper<'a> {
             if !now && ledger.closed(ci) {
                 ledger.open(ci, t1, dd1, impulse[ci]);
                 stats.events += 1;
+                opened_now.push(ci);
             }
             force[ci] = f_new[ci];
         }
@@ -651,7 +682,14 @@ impl<'a> NewmarkStepper<'a> {
         self.e_in = e_in;
         self.e_damp = e_damp;
         self.e_work = e_work;
-        Ok(())
+        Ok(if closed_now.is_empty() && opened_now.is_empty() {
+            StepOutcome::Accepted
+        } else {
+            StepOutcome::ContactsChanged {
+                closed: closed_now.clone(),
+                opened: opened_now.clone(),
+            }
+        })
     }
 
     /// Ends the run at `t_end` (s): the impacts (episodes still open reported up to the
@@ -676,20 +714,25 @@ impl<'a> NewmarkStepper<'a> {
     }
 }
 
-/// The driver: the Newmark steps in turn, the response observed after each.
+/// The driver: owns the loop over the Newmark steps until the stepper reports
+/// [`StepOutcome::Finished`], the response tracker, the history and the overlap audit.
+/// Every step is observed, whatever its contacts did.
 pub(crate) fn run(
     scene: &Scene,
     sys: &System,
     mut history: Option<&mut History>,
 ) -> Result<RunOutput, SolverError> {
-    let (mut st, nsteps) = NewmarkStepper::new(scene, sys)?;
+    let mut st = NewmarkStepper::new(scene, sys)?;
     let mut tracker = ResponseTracker::new(scene);
     let mut overlaps = crate::overlap::OverlapTracker::new(scene);
     sys.observe_overlaps(&mut overlaps, 0.0, &st.u);
     sys.observe_sample(&st.stories, &mut tracker, &st.u, &st.v, &st.force);
     tracker.sample(0.0, history.as_deref_mut());
-    for _ in 0..nsteps {
-        let t1 = st.step()?;
+    loop {
+        if let StepOutcome::Finished = st.step()? {
+            break;
+        }
+        let t1 = st.t();
         // Peaks at every step, as a finite-element program reports them (not continuous
         // maxima: between steps Newmark has no interpolant of its own accuracy).
         if history.is_some() {

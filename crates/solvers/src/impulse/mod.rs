@@ -23,7 +23,7 @@
 //! Error control: rtol = `gap_element.tolerance`, atol = rtol·1e-3 (m, m/s); steps land on
 //! every record point.
 //!
-//! **Events**, located on the dense output after every accepted step (θ = ¼, ½, ¾, 1 and
+//! **Events** (`events.rs`), located on the dense output after every accepted step (θ = ¼, ½, ¾, 1 and
 //! Brent, root tolerance 2ε·t as in the momentum method; the step is cut at the first
 //! event and the state taken from the interpolant):
 //! - closure of an open contact: δ crosses 0 upwards, with the momentum method's case
@@ -36,7 +36,7 @@
 //!   restoring forces) over W_cc: the momentum method's round-off band. A contact whose
 //!   force is already below −band_c at a step start is released there.
 //!
-//! **Impacts** (`stepper.rs`): the momentum method's rules, with its impulse code
+//! **Impacts** (`impact.rs`): the momentum method's rules, with its impulse code
 //! ([`crate::momentum::impulse`]) on mass-scaled velocities w = M^½ v (`contact.rs`):
 //! W_AA P_A = (1 + c_r) v_A on the impacting set (small LCP), Δv = −M⁻¹Gᵀ P; a contact
 //! approaching at most `momentum.capture_velocity` is touching (joins the held set if its
@@ -45,7 +45,7 @@
 //! captured by a plastic impulse into persistent contact. The kinetic energy lost goes to
 //! the contact account.
 //!
-//! **Held contacts**: after every accepted step their relative velocity and gap are
+//! **Held contacts** (`held.rs`): after every accepted step their relative velocity and gap are
 //! projected to zero (Δv = −M⁻¹Gᵀ W⁻¹ G v, Δu = −M⁻¹Gᵀ W⁻¹ δ), the mechanical energy removed
 //! going to the contact account, as the momentum method projects at every held-segment end.
 //!
@@ -80,6 +80,35 @@
 //! below T_min/7.6 and holds at most one extremum of a gap function, as the momentum
 //! method's T_min/8 windows do.
 //!
+//! **Shape** (issue 10; the adaptive gap element's, see `crate::step`):
+//! - `problem.rs`: `Problem` (the system, contact rows, re-arming bands, the
+//!   chattering-capture step) and `Config` (the options it reads), fixed for a
+//!   run;
+//! - `stepper.rs`: `State` (y, t, committed stories, held set, grazing flags,
+//!   impact times) and `ImpulseStepper::step`, which takes one trial step and
+//!   reports a `StepOutcome`: `Rejected` (nothing moved), `Accepted`,
+//!   `Breakpoint` (the record point reached), `Impact` (the step was cut at closures,
+//!   resolved by the impact law), `ContactOpened` (cut at the release of a held contact),
+//!   `StoryKink` (cut at a kink), or `Released` (a held contact already tensile at the step
+//!   start was released; no step). The accepted part of each step is shown to the driver on
+//!   the dense output before the state moves on. A rejected step changes nothing: the
+//!   contact state changes only at an accepted state;
+//! - `events.rs` (closure, release and kink location), `impact.rs` (impacts), `held.rs`
+//!   (holding forces, projection, release), `contact.rs` (contact rows in mass-scaled
+//!   coordinates);
+//! - `driver.rs`: the one loop over the record intervals, owning the response tracker
+//!   (continuous peaks from the dense output with the adaptive gap element's
+//!   `dense_peaks`, samples at record points and events), the
+//!   history and the overlap audit (its `dense_overlaps`).
+//!
+//! The contact books are not the gap element's `ContactLedger` (modes and spring
+//! episodes from closure to opening, with a duration, a peak force and a penetration
+//! raised while they last): a rigid impact is one instantaneous impulse with the speeds
+//! just before and after it, and a contact that stays closed is a held contact with its
+//! own persistent phase and release rule. They keep the momentum method's books (impacts,
+//! persistent phases, the impact times of the chattering capture) and share the rule that
+//! is the same: the impact-rate guard ([`crate::rules::ImpactRateGuard`]).
+//!
 //! **Options**: `gap_element.tolerance` (the step error tolerance, default 1e-8),
 //! `momentum.persistent_contact`, `momentum.capture_velocity`, the contacts' `gap` and
 //! `restitution`, `analysis.max_impact_rate`, `analysis.max_steps`. `momentum.modes` and
@@ -87,73 +116,26 @@
 //! masses is the paper's impulse, eqs 23–24, exactly).
 
 mod contact;
+mod driver;
+mod events;
+mod held;
+mod impact;
+mod problem;
 mod stepper;
 
 use structure::Scene;
 
 use crate::gap::System;
-use crate::{EnergyAudit, History, RunOutput, SolverError};
+use crate::{History, RunOutput, SolverError};
 
 /// Runs the impulse method.
 pub fn solve(scene: &Scene, history: Option<&mut History>) -> Result<RunOutput, SolverError> {
     let clock = std::time::Instant::now();
     let sys = System::new(scene)?;
     refuse_too_long(scene, &sys)?;
-    let (run, tracker, overlaps) = stepper::run(scene, &sys, history)?;
-    let n = sys.n;
-    let y = &run.y;
-    if !y.iter().all(|x| x.is_finite()) {
-        return Err(SolverError::NonFinite {
-            time: run.t,
-            context: "floor state at the end of the analysis".into(),
-        });
-    }
-    let mut stories0 = sys.stories();
-    stories0.start(&sys.u0, &sys.v0);
-    let initial = sys.mech_energy(&stories0, &sys.u0, &sys.v0);
-    let final_ = sys.mech_energy(&run.stories, &y[..n], &y[n..2 * n]);
-    let (input, damping) = (y[2 * n], y[2 * n + 1]);
-    let contact = y[2 * n + 2] + run.contact_loss;
-    let hysteretic = run.stories.hysteretic_energy();
-    let energy = EnergyAudit {
-        initial,
-        input,
-        damping,
-        contact,
-        hysteretic,
-        final_,
-        balance_error: initial + input - damping - contact - hysteretic - final_,
-    };
-    let m = &scene.momentum;
-    let settings = format!(
-        "impulse, consistent impulse on all floors, adaptive dopri5 tol={:.0e}, persistent contact {}",
-        scene.gap_element.tolerance,
-        if m.persistent_contact {
-            format!("on (capture {:.1e} m/s)", m.capture_velocity)
-        } else {
-            "off".into()
-        }
-    );
-    let mut buildings = tracker.finish();
-    for (bi, b) in buildings.iter_mut().enumerate() {
-        b.hysteretic_energy = run.stories.building_hysteretic_energy(bi);
-    }
-    let mut stats = run.stats;
-    stats.wall_seconds = clock.elapsed().as_secs_f64();
-    Ok(RunOutput {
-        method: "impulse".into(),
-        settings,
-        scene: scene.name.clone(),
-        duration: scene.duration,
-        buildings,
-        impacts: run.impacts,
-        persistent_contacts: run.phases,
-        energy,
-        stats,
-        r_n: Vec::new(),
-        overlaps: overlaps.finish(scene),
-        unmodelled: crate::overlap::unmodelled(scene),
-    })
+    let mut out = driver::run(scene, &sys, history)?;
+    out.stats.wall_seconds = clock.elapsed().as_secs_f64();
+    Ok(out)
 }
 
 /// Refuses, before anything is integrated, a run whose step count surely exceeds

@@ -1,39 +1,43 @@
-//! The driver loop of the impulse method (one loop: [`run`]) and the event handlers it
-//! calls: impacts ([`Run::impact`]), releases ([`Run::release`]) and the projection of held
-//! contacts ([`Run::project_held`]). See the module docs of [`super`] for the equations.
+//! The impulse method's stepper: the state between two steps ([`State`]), the right-hand
+//! side with the held contacts ([`rhs`]) and [`ImpulseStepper::step`], which takes one
+//! trial step of the gap element's Dormand–Prince pair, locates the earliest event on its
+//! dense output ([`super::events`]), cuts the step there, handles the event (an impact,
+//! [`super::impact`]; a release or the projection of held contacts, [`super::held`]; a
+//! story kink) and reports a [`StepOutcome`]. See the module docs of [`super`] for the
+//! equations and [`super::driver`] for the loop.
 
 use std::collections::VecDeque;
 
-use structure::{MomentumOptions, Scene};
+use structure::Scene;
 
-use super::contact;
-use crate::gap::adaptive::{dense_overlaps, dense_peaks, kin};
+use super::events::{self, Event};
+use super::held::{self, Held};
+use super::problem::{Config, Problem};
+use crate::gap::adaptive::DenseStep;
 use crate::gap::dopri::Dopri5;
 use crate::gap::stories::Kink;
 use crate::gap::{Segment, Stories, System};
-use crate::momentum::events::Conv;
-use crate::momentum::impact::restitution;
-use crate::momentum::impulse::{self, ContactGeom};
-use crate::momentum::problem::SIMULTANEOUS;
-use crate::overlap::OverlapTracker;
+use crate::output::EnergyAudit;
 use crate::response::ResponseTracker;
 use crate::rules::ImpactRateGuard;
-use crate::{History, Impact, PersistentContact, SolverError, Stats};
-
-/// Samples of the dense output per step for the event search (each window holds at most one
-/// extremum of a gap function: steps are far below an eighth of the shortest period).
-const EVENT_SAMPLES: usize = 4;
-
-/// Relative round-off band of the holding forces (as in the momentum method).
-const FORCE_BAND: f64 = 1e-9;
+use crate::step::StepOutcome;
+use crate::{Impact, PersistentContact, SolverError, Stats};
 
 /// The restoring forces −f_s(u) − C v (N) into `f` (f_s = K u for linear stories, the story
 /// law from the committed `stories` state for yielding ones: a pure trial); returns the
 /// damping power vᵀ C v (W).
 ///
-/// The one place where the impulse method calls [`System::internal`].
-#[inline]
-fn restoring(sys: &System, stories: &Stories, u: &[f64], v: &[f64], f: &mut [f64]) -> f64 {
+/// The one place where the impulse method calls [`System::internal`]. Not inlined: with
+/// the story loop inlined into [`rhs`] the right-hand side runs ~8 % more instructions
+/// (callgrind, paper scene), as LLVM decided once the stepper left the driver's module.
+#[inline(never)]
+pub(super) fn restoring(
+    sys: &System,
+    stories: &Stories,
+    u: &[f64],
+    v: &[f64],
+    f: &mut [f64],
+) -> f64 {
     sys.internal(stories, u, v, f)
 }
 
@@ -59,16 +63,6 @@ fn free_acceleration(
         acc[i] *= sys.inv_mass[i];
     }
     (pin, pdamp)
-}
-
-/// The contacts held together (persistent contact) and the inverse of their Delassus
-/// matrix.
-#[derive(Debug, Clone, Default)]
-struct Held {
-    set: Vec<usize>,
-    start: Vec<f64>,
-    /// W⁻¹ of `set`, row-major.
-    inv: Vec<f64>,
 }
 
 /// Right-hand side of y = [u; v; E_input; E_damping; W_contact] with the held contacts
@@ -116,588 +110,240 @@ fn rhs(
     extra[2] = pc;
 }
 
-/// Brent's method on [a, b] with absolute tolerance `tol`; without a bracket (round-off at
-/// an end) the end where |f| is smaller.
-fn brent(mut f: impl FnMut(f64) -> f64, a: f64, b: f64, tol: f64, iters: &mut u64) -> f64 {
-    let mut conv = Conv { tol, iterations: 0 };
-    let r = roots::find_root_brent(a, b, &mut f, &mut conv);
-    *iters += conv.iterations as u64 + 1;
-    match r {
-        Ok(s) => s.clamp(a, b),
-        Err(_) => {
-            if f(a).abs() <= f(b).abs() {
-                a
-            } else {
-                b
-            }
-        }
-    }
-}
-
-/// The first closure θ in the window [lo, hi] of the dense output, given (δ, δ̇) at both
-/// ends: the momentum method's case analysis ([`crate::momentum::events`]) on the
-/// interpolant instead of the closed form (the interior maximum is located by Brent on δ̇
-/// whenever δ̇ turns from + to −, without the closed form's rigorous filter).
-#[allow(clippy::too_many_arguments)]
-fn closure_in(
-    f: impl Fn(f64) -> (f64, f64),
-    lo: f64,
-    hi: f64,
-    (d0, dd0): (f64, f64),
-    (d1, dd1): (f64, f64),
-    tol: f64,
-    iters: &mut u64,
-) -> Option<f64> {
-    let d = |s: f64| f(s).0;
-    let dd = |s: f64| f(s).1;
-    if d0 >= 0.0 {
-        if dd0 > 0.0 {
-            return if d1 >= 0.0 { Some(lo) } else { None };
-        }
-        if dd1 <= 0.0 {
-            return None;
-        }
-        let s_min = brent(dd, lo, hi, tol, iters);
-        if d(s_min) >= 0.0 {
-            return Some(s_min);
-        }
-        if d1 >= 0.0 {
-            return Some(brent(d, s_min, hi, tol, iters));
-        }
-        return None;
-    }
-    if d1 >= 0.0 {
-        if dd0 < 0.0 && dd1 > 0.0 {
-            let s_min = brent(dd, lo, hi, tol, iters);
-            return Some(brent(d, s_min, hi, tol, iters));
-        }
-        return Some(brent(d, lo, hi, tol, iters));
-    }
-    if dd0 > 0.0 && dd1 < 0.0 {
-        let s_max = brent(dd, lo, hi, tol, iters);
-        if d(s_max) >= 0.0 {
-            return Some(brent(d, lo, s_max, tol, iters));
-        }
-    }
-    None
-}
-
-/// The state of a run and its accumulated results.
-pub(crate) struct Run<'a> {
-    sys: &'a System,
-    opts: MomentumOptions,
-    geoms: Vec<ContactGeom>,
+/// The state of the impulse method between two steps: what the integration moves and what
+/// the contact rules remember.
+pub(super) struct State {
     /// y = [u; v; E_input; E_damping; W_contact].
     pub y: Vec<f64>,
+    /// Time, s.
+    pub t: f64,
     /// Committed state of the yielding stories (empty for linear buildings).
     pub stories: Stories,
-    pub t: f64,
-    held: Held,
-    buf: Vec<f64>,
+    /// The contacts held together (persistent contact) and W⁻¹ of their set.
+    pub held: Held,
     /// Per contact: just resolved and not yet re-armed (see the momentum method's stepper).
-    grazing: Vec<bool>,
-    /// Round-off band of each gap, m: 1e-9 · max(gap, 1 mm).
-    pen: Vec<f64>,
-    last_impacts: Vec<VecDeque<f64>>,
-    guard: ImpactRateGuard,
-    /// The momentum method's base step h (record step, or T_min/8 without a record): the
-    /// chattering-capture rule compares impact intervals with it.
-    capture_h: f64,
-    /// Energy lost in impacts and in the projections of held contacts, J.
-    pub contact_loss: f64,
-    pub impacts: Vec<Impact>,
-    pub phases: Vec<PersistentContact>,
-    pub stats: Stats,
+    pub grazing: Vec<bool>,
+    /// Per contact: the times of its last three impacts (chattering capture).
+    pub last_impacts: Vec<VecDeque<f64>>,
 }
 
-impl<'a> Run<'a> {
-    fn n(&self) -> usize {
-        self.sys.n
-    }
+/// The impulse method between two calls of [`ImpulseStepper::step`]: the problem and
+/// configuration (fixed), the [`State`], the Dormand–Prince state (next step h, FSAL
+/// stage, rejection flag, step count), the record piece of the ground motion, and the
+/// books of the run (impacts, persistent phases, contact losses, the impact-rate guard,
+/// statistics). Like the adaptive gap stepper it knows nothing of peaks, histories or
+/// record points other than the one it is told to stop at.
+pub(super) struct ImpulseStepper<'a> {
+    pub(super) p: Problem<'a>,
+    pub(super) cfg: Config,
+    pub(super) s: State,
+    dp: Dopri5,
+    /// Next trial step, s.
+    h: f64,
+    seg: Segment,
+    rejected_before: bool,
+    total_steps: u64,
+    /// Scratch of the right-hand side: 2·|held| numbers.
+    pub(super) buf: Vec<f64>,
+    /// Scratch of one state (event search).
+    scratch: Vec<f64>,
+    /// The state at the end of the accepted part of a step.
+    y_end: Vec<f64>,
+    /// The step that landed on the record point changed the state or the held set: the
+    /// FSAL stage is refreshed in [`ImpulseStepper::enter_segment`], once, with the next
+    /// ground piece.
+    stale: bool,
+    pub(super) guard: ImpactRateGuard,
+    /// Energy lost in impacts and in the projections of held contacts, J.
+    pub(super) contact_loss: f64,
+    pub(super) impacts: Vec<Impact>,
+    pub(super) phases: Vec<PersistentContact>,
+    pub(super) stats: Stats,
+}
 
-    /// The derivative at the current state into `k0` (the first stage of the next step):
-    /// a restart of the FSAL chain after the state, the held set or the ground piece changed.
-    fn restart(&mut self, seg: &Segment, k0: &mut [f64]) {
-        rhs(
-            self.sys,
-            &self.stories,
-            seg,
-            &self.held,
-            &mut self.buf,
-            self.t,
-            &self.y,
-            k0,
-        );
-        self.stats.rhs_evaluations += 1;
-    }
-
-    /// Kinetic energy ½ vᵀ M v, J.
-    fn kinetic(&self) -> f64 {
-        let n = self.n();
-        0.5 * self.y[n..2 * n]
-            .iter()
-            .zip(&self.sys.mass)
-            .map(|(v, m)| m * v * v)
-            .sum::<f64>()
-    }
-
-    /// Relative accelerations G ü_free of the contacts `set` without contact forces, m/s²,
-    /// and for each the round-off band of its holding force, N: 1e-9 × (|f_l|/m_l + |a_g|
-    /// plus the same at the right floor) / W_cc, f the restoring forces (the momentum
-    /// method's band, with the floors' forces in place of its modal terms).
-    fn free_relative(&self, set: &[usize], y: &[f64], ag: f64) -> (Vec<f64>, Vec<f64>) {
-        let (sys, n) = (self.sys, self.n());
-        let mut f = vec![0.0; n];
-        restoring(sys, &self.stories, &y[..n], &y[n..2 * n], &mut f);
-        let mut acc = vec![0.0; n];
-        for i in 0..n {
-            acc[i] = (f[i] - sys.mass[i] * ag) * sys.inv_mass[i];
-        }
-        let mut dd = Vec::with_capacity(set.len());
-        let mut tol = Vec::with_capacity(set.len());
-        for &c in set {
-            let cd = &sys.contacts[c];
-            dd.push(cd.rel(&acc));
-            let mut sc = f[cd.l].abs() * sys.inv_mass[cd.l] + ag.abs();
-            if !cd.wall {
-                sc += f[cd.r].abs() * sys.inv_mass[cd.r] + ag.abs();
-            }
-            let g = &self.geoms[c];
-            tol.push(FORCE_BAND * sc / g.dot(&g.g));
-        }
-        (dd, tol)
-    }
-
-    /// Instantaneous holding forces λ = W⁻¹ G ü_free (N, > 0 compressive) of `set` in the
-    /// state `y` under ground acceleration `ag`, with their round-off bands.
-    fn holding_forces(
-        &self,
-        set: &[usize],
-        y: &[f64],
-        ag: f64,
-        time: f64,
-    ) -> Result<(Vec<f64>, Vec<f64>), SolverError> {
-        let (dd, tol) = self.free_relative(set, y, ag);
-        let lam = impulse::solve_delassus(&self.geoms, set, dd, time, "holding forces")?;
-        Ok((lam, tol))
-    }
-
-    /// Holding forces of the held set from its stored W⁻¹ (no failure possible): the
-    /// smallest λ_k / band_k and its index in the held set.
-    fn held_force_ratio(&self, y: &[f64], ag: f64) -> (f64, usize) {
-        let k = self.held.set.len();
-        let (dd, tol) = self.free_relative(&self.held.set, y, ag);
-        (0..k)
-            .map(|a| {
-                let lam: f64 = (0..k).map(|b| self.held.inv[a * k + b] * dd[b]).sum();
-                (lam / tol[a].max(f64::MIN_POSITIVE), a)
-            })
-            .fold((f64::INFINITY, 0), |m, x| if x.0 < m.0 { x } else { m })
-    }
-
-    /// Holding forces of the held contacts per scene contact (history output).
-    fn contact_forces(&self, ag: f64) -> Vec<f64> {
-        let mut out = vec![0.0; self.sys.contacts.len()];
-        let k = self.held.set.len();
-        if k > 0 {
-            let (dd, _) = self.free_relative(&self.held.set, &self.y, ag);
-            for (a, &c) in self.held.set.iter().enumerate() {
-                out[c] = (0..k).map(|b| self.held.inv[a * k + b] * dd[b]).sum();
-            }
-        }
-        out
-    }
-
-    /// Recomputes W⁻¹ after the held set changed.
-    fn held_changed(&mut self) -> Result<(), SolverError> {
-        self.held.inv = contact::delassus_inverse(&self.geoms, &self.held.set, self.t)?;
-        self.buf = vec![0.0; 2 * self.held.set.len()];
-        Ok(())
-    }
-
-    fn join_held(&mut self, c: usize) {
-        if !self.held.set.contains(&c) {
-            self.held.set.push(c);
-            self.held.start.push(self.t);
-            self.last_impacts[c].clear();
-        }
-    }
-
-    /// Applies impulses (contact, P) to the velocities, returning the kinetic energy lost.
-    fn apply_impulses(&mut self, imp: &[(usize, f64)]) -> f64 {
-        let n = self.n();
-        let ke0 = self.kinetic();
-        let mut w = contact::scale(self.sys, &self.y[n..2 * n]);
-        impulse::apply(&self.geoms, imp, &mut w);
-        contact::unscale(self.sys, &w, &mut self.y[n..2 * n]);
-        ke0 - self.kinetic()
-    }
-
-    /// Relative velocity u̇_l − u̇_r of contact c, m/s.
-    fn rel_velocity(&self, c: usize) -> f64 {
-        let n = self.n();
-        self.sys.contacts[c].rel(&self.y[n..2 * n])
-    }
-
-    /// Commits the yielding stories at the current state (`kink`: the story kink located
-    /// at this state, if any). Called for every accepted state and after every change of the
-    /// state by an event (impulse, projection), never for a trial.
-    fn commit(&mut self, kink: Option<&Kink>) {
-        let n = self.n();
-        self.stories.commit(&self.y[..n], &self.y[n..2 * n], kink);
-    }
-
-    /// Mechanical energy (kinetic + recoverable strain) plus the hysteretic energy
-    /// dissipated so far, J, with the committed story state.
-    fn energy_with_hysteresis(&self) -> f64 {
-        let n = self.n();
-        self.sys
-            .mech_energy(&self.stories, &self.y[..n], &self.y[n..2 * n])
-            + self.stories.hysteretic_energy()
-    }
-
-    /// Sets the relative velocity and the gap of the contacts `set` to zero: a plastic
-    /// micro-impulse Δv = −M⁻¹Gᵀ W⁻¹ G v and the mass-weighted position correction
-    /// Δu = −M⁻¹Gᵀ W⁻¹ δ; the mechanical energy they remove goes to the contact account
-    /// (for a yielding story, net of the plastic work the correction does: the stories are
-    /// committed at the corrected state). The stories must be committed at the current state.
-    fn project_held(&mut self, set: &[usize]) -> Result<(), SolverError> {
-        if set.is_empty() {
-            return Ok(());
-        }
-        let (sys, n) = (self.sys, self.n());
-        let vrel: Vec<f64> = set.iter().map(|&c| self.rel_velocity(c)).collect();
-        let p = impulse::solve_delassus(&self.geoms, set, vrel, self.t, "held contacts")?;
-        let imp: Vec<(usize, f64)> = set.iter().copied().zip(p).collect();
-        self.contact_loss += self.apply_impulses(&imp);
-        let dgap: Vec<f64> = set
-            .iter()
-            .map(|&c| sys.contacts[c].rel(&self.y[..n]) - sys.contacts[c].gap)
-            .collect();
-        let x = impulse::solve_delassus(&self.geoms, set, dgap, self.t, "held contacts")?;
-        let e0 = self.energy_with_hysteresis();
-        let mut ws = contact::scale(sys, &self.y[..n]);
-        let corr: Vec<(usize, f64)> = set.iter().copied().zip(x).collect();
-        impulse::apply(&self.geoms, &corr, &mut ws);
-        contact::unscale(sys, &ws, &mut self.y[..n]);
-        self.commit(None);
-        self.contact_loss += e0 - self.energy_with_hysteresis();
-        Ok(())
-    }
-
-    /// Ends the persistent phase of `contact` now (its holding force turned tensile).
-    fn release(&mut self, contact: usize) -> Result<(), SolverError> {
-        let t = self.t;
-        if let Some(i) = self.held.set.iter().position(|&c| c == contact) {
-            self.held.set.remove(i);
-            let start = self.held.start.remove(i);
-            if t > start {
-                self.phases.push(PersistentContact {
-                    contact,
-                    start,
-                    end: t,
-                    released_by: "tension".into(),
+impl<'a> ImpulseStepper<'a> {
+    /// The initial state of `sys` (refused if a contact starts penetrated beyond its band;
+    /// an initial drift beyond yield starts its story on the yield surface), the first stage
+    /// and Hairer's starting step, at most up to the first record point `t_bp` (s).
+    pub fn new(scene: &Scene, sys: &'a System, t_bp: f64) -> Result<Self, SolverError> {
+        let n = sys.n;
+        let dim = 2 * n + 3;
+        let cfg = Config::new(scene);
+        let tol = cfg.tolerance;
+        let dp = Dopri5::new(dim, 2 * n, tol, vec![tol * 1e-3; 2 * n]);
+        let p = Problem::new(scene, sys);
+        let nc = p.geoms.len();
+        let mut y = vec![0.0; dim];
+        y[..n].copy_from_slice(&sys.u0);
+        y[n..2 * n].copy_from_slice(&sys.v0);
+        for (c, cd) in sys.contacts.iter().enumerate() {
+            let d = cd.rel(&y[..n]) - cd.gap;
+            if d > p.pen[c] {
+                return Err(SolverError::Stalled {
+                    time: 0.0,
+                    reason: format!(
+                        "contact {c} starts penetrated by {d:.3e} m (initial displacements exceed the gap)"
+                    ),
                 });
             }
         }
-        self.grazing[contact] = true;
-        self.stats.events += 1;
-        self.held_changed()
+        // An initial drift beyond yield starts its story on the yield surface (as the gap
+        // element's integrators do), before the initial energy is taken.
+        let mut stories = sys.stories();
+        {
+            let (u0, v0) = y[..2 * n].split_at(n);
+            stories.start(u0, v0);
+        }
+        let mut st = ImpulseStepper {
+            p,
+            cfg,
+            s: State {
+                y,
+                t: 0.0,
+                stories,
+                held: Held::default(),
+                grazing: vec![false; nc],
+                last_impacts: vec![VecDeque::new(); nc],
+            },
+            dp,
+            h: 0.0,
+            seg: sys.segment(0),
+            rejected_before: false,
+            total_steps: 0,
+            buf: Vec::new(),
+            scratch: vec![0.0; dim],
+            y_end: vec![0.0; dim],
+            stale: false,
+            guard: ImpactRateGuard::new(cfg.max_impact_rate),
+            contact_loss: 0.0,
+            impacts: Vec::new(),
+            phases: Vec::new(),
+            stats: Stats {
+                min_step: f64::INFINITY,
+                ..Stats::default()
+            },
+        };
+        st.restart();
+        st.h = {
+            let (stories, held, buf, seg) = (&st.s.stories, &st.s.held, &mut st.buf, &st.seg);
+            let mut f =
+                |tt: f64, yy: &[f64], o: &mut [f64]| rhs(sys, stories, seg, held, buf, tt, yy, o);
+            st.dp
+                .initial_step(&mut f, st.s.t, &st.s.y.clone(), t_bp - st.s.t)
+        };
+        st.stats.rhs_evaluations += 1;
+        Ok(st)
     }
 
-    /// Resolves the contacts found closing now: the momentum method's rules
-    /// ([`crate::momentum::Stepper::impact`]) on the physical velocities. Only an
-    /// approaching contact (δ̇ > `capture_velocity`) is an impact; a separating one is
-    /// ignored; a touching one joins the held set if holding it needs a compressive force
-    /// and grazes otherwise. Impacts get the consistent impulse W_AA P_A = (1 + e) v_A
-    /// (small LCP), with e = 0 for a chattering capture.
-    fn impact(&mut self, closing: &[usize], ag: f64) -> Result<(), SolverError> {
-        let t = self.t;
-        let opts = self.opts.clone();
-        self.stats.events += 1;
-        let cap = opts.capture_velocity;
-        let mut contacts = Vec::with_capacity(closing.len());
-        let mut touching = Vec::new();
-        for &c in closing {
-            let v = self.rel_velocity(c);
-            if v < -cap {
-                self.grazing[c] = true;
-            } else if v > cap || (v > 0.0 && !opts.persistent_contact) {
-                contacts.push(c);
-            } else {
-                touching.push(c);
-            }
-        }
-        let mut set_changed = false;
-        if !touching.is_empty() {
-            let held = self.held.set.clone();
-            let mut set = held.clone();
-            set.extend(&touching);
-            let y = self.y.clone();
-            let (lam, tol) = self.holding_forces(&set, &y, ag, t)?;
-            let mut join = held.clone();
-            let mut graze = Vec::new();
-            for (k, &c) in set.iter().enumerate().skip(held.len()) {
-                if lam[k] >= -tol[k] && !opts.persistent_contact {
-                    return Err(crate::momentum::impact::stalled_without_persistence(
-                        c,
-                        t,
-                        self.geoms[c].restitution,
-                    ));
-                }
-                if lam[k] >= -tol[k] {
-                    join.push(c);
-                    self.join_held(c);
-                    set_changed = true;
-                } else {
-                    graze.push(c);
-                }
-                self.grazing[c] = true;
-            }
-            join.extend(&graze);
-            self.project_held(&join)?;
-        }
-        if !contacts.is_empty() {
-            self.impulses(&contacts, &mut set_changed)?;
-        }
-        // The velocities changed: the flow flags of yielding stories follow.
-        self.commit(None);
-        if set_changed {
-            self.held_changed()?;
-        }
-        Ok(())
+    /// Time, s.
+    pub fn t(&self) -> f64 {
+        self.s.t
     }
 
-    /// The impacts proper of [`Self::impact`].
-    fn impulses(&mut self, contacts: &[usize], set_changed: &mut bool) -> Result<(), SolverError> {
-        let t = self.t;
-        let opts = self.opts.clone();
-        for &c in contacts {
-            let cr = self.geoms[c].restitution;
-            let pc = opts.persistent_contact;
-            self.guard.record(t, || {
-                format!("contact {c} (c_r = {cr}) keeps impacting; persistent_contact = {pc}")
-            })?;
-        }
-        let v_before: Vec<f64> = contacts.iter().map(|&c| self.rel_velocity(c)).collect();
-        let mut captured = vec![false; contacts.len()];
-        for (k, &c) in contacts.iter().enumerate() {
-            let hist = &mut self.last_impacts[c];
-            hist.push_back(t);
-            if hist.len() > 3 {
-                hist.pop_front();
-            }
-            let h = self.capture_h;
-            let accumulating = hist.len() == 3 && {
-                let (d1, d2) = (hist[1] - hist[0], hist[2] - hist[1]);
-                let r = d2 / d1;
-                d1 > 0.0
-                    && r < 1.0
-                    && d2 < h
-                    && d2 * r / (1.0 - r) < h
-                    && self.geoms[c].restitution < 1.0
-            };
-            captured[k] =
-                opts.persistent_contact && (v_before[k] < opts.capture_velocity || accumulating);
-        }
-        let target: Vec<f64> = contacts
-            .iter()
-            .zip(&captured)
-            .zip(&v_before)
-            .map(|((&c, &cap), v)| {
-                let e = if cap { 0.0 } else { self.geoms[c].restitution };
-                (1.0 + e) * v.max(0.0)
-            })
-            .collect();
-        let imp = impulse::lcp_impulses(&self.geoms, contacts, &target, t)?;
-        self.contact_loss += self.apply_impulses(&imp);
-        for (k, &c) in contacts.iter().enumerate() {
-            let vb = v_before[k];
-            let va = self.rel_velocity(c);
-            let p = imp.iter().find(|(x, _)| *x == c).map_or(0.0, |&(_, p)| p);
-            let undefined = if vb <= opts.capture_velocity {
-                Some("touching: approach speed at most momentum.capture_velocity")
-            } else if captured[k] {
-                Some("chattering capture: the accumulating impacts resolved as one plastic impulse")
-            } else {
-                None
-            };
-            self.impacts.push(Impact {
-                contact: c,
-                time: t,
-                relative_velocity_before: vb,
-                relative_velocity_after: va,
-                achieved_restitution: restitution(vb, va, undefined),
-                restitution_undefined: undefined.map(String::from),
-                impulse: p,
-                duration: None,
-                peak_force: None,
-                max_penetration: None,
-            });
-            self.stats.impacts += 1;
-            self.grazing[c] = true;
-            if captured[k] && !self.held.set.contains(&c) {
-                self.join_held(c);
-                *set_changed = true;
-            }
-        }
-        if !self.y.iter().all(|x| x.is_finite()) {
-            return Err(SolverError::NonFinite {
-                time: t,
-                context: "floor velocities after an impulse".into(),
-            });
-        }
-        Ok(())
-    }
-}
-
-/// The earliest event of an accepted step: its θ and what it is.
-#[derive(Debug, Clone)]
-enum Event {
-    Closure(Vec<usize>),
-    Release(usize),
-    /// A kink of a yielding story (yield or unloading) before any contact event.
-    Kink(Kink),
-}
-
-/// Runs the impulse method on the assembled system.
-pub(crate) fn run<'a>(
-    scene: &Scene,
-    sys: &'a System,
-    mut history: Option<&mut History>,
-) -> Result<(Run<'a>, ResponseTracker, OverlapTracker), SolverError> {
-    let n = sys.n;
-    let dim = 2 * n + 3;
-    let tol = scene.gap_element.tolerance;
-    let mut dp = Dopri5::new(dim, 2 * n, tol, vec![tol * 1e-3; 2 * n]);
-    let duration = scene.duration;
-    let limits = &scene.limits;
-    let geoms = contact::geometry(sys, scene);
-    let nc = geoms.len();
-    let capture_h = match &scene.ground {
-        Some(g) => g.dt,
-        None => 2.0 * std::f64::consts::PI / sys.omega_max / 8.0,
-    };
-    let mut y = vec![0.0; dim];
-    y[..n].copy_from_slice(&sys.u0);
-    y[n..2 * n].copy_from_slice(&sys.v0);
-    let mut r = Run {
-        sys,
-        opts: scene.momentum.clone(),
-        pen: geoms.iter().map(|c| 1e-9 * c.gap.max(1e-3)).collect(),
-        geoms,
-        y,
-        stories: sys.stories(),
-        t: 0.0,
-        held: Held::default(),
-        buf: Vec::new(),
-        grazing: vec![false; nc],
-        last_impacts: vec![VecDeque::new(); nc],
-        guard: ImpactRateGuard::new(limits.max_impact_rate),
-        capture_h,
-        contact_loss: 0.0,
-        impacts: Vec::new(),
-        phases: Vec::new(),
-        stats: Stats {
-            min_step: f64::INFINITY,
-            ..Stats::default()
-        },
-    };
-    for (c, cd) in sys.contacts.iter().enumerate() {
-        let d = cd.rel(&r.y[..n]) - cd.gap;
-        if d > r.pen[c] {
-            return Err(SolverError::Stalled {
-                time: 0.0,
-                reason: format!(
-                    "contact {c} starts penetrated by {d:.3e} m (initial displacements exceed the gap)"
-                ),
-            });
-        }
+    /// Floor displacements, m.
+    pub fn u(&self) -> &[f64] {
+        &self.s.y[..self.p.sys.n]
     }
 
-    // An initial drift beyond yield starts its story on the yield surface (as the gap
-    // element's integrators do), before the initial energy is taken.
-    {
-        let (u0, v0) = r.y[..2 * n].split_at(n);
-        r.stories.start(u0, v0);
+    /// The derivative at the current state into the first stage of the next step: a
+    /// restart of the FSAL chain after the state, the held set or the ground piece changed.
+    pub(super) fn restart(&mut self) {
+        rhs(
+            self.p.sys,
+            &self.s.stories,
+            &self.seg,
+            &self.s.held,
+            &mut self.buf,
+            self.s.t,
+            &self.s.y,
+            &mut self.dp.k[0],
+        );
+        self.stats.rhs_evaluations += 1;
+        self.stale = false;
     }
-    let mut tracker = ResponseTracker::new(scene);
-    let mut overlaps = OverlapTracker::new(scene);
-    let observe = |r: &Run, tracker: &mut ResponseTracker, history: Option<&mut History>, ag| {
-        let (u, v) = (&r.y[..n], &r.y[n..2 * n]);
-        if history.is_some() {
-            sys.observe_sample(&r.stories, tracker, u, v, &r.contact_forces(ag));
+
+    /// Observes the current state for peaks and, when a history is kept, for its next
+    /// sample (with the holding forces of the held contacts).
+    pub fn observe(&self, tracker: &mut ResponseTracker, history: bool) {
+        let sys = self.p.sys;
+        let n = sys.n;
+        let (u, v) = (&self.s.y[..n], &self.s.y[n..2 * n]);
+        if history {
+            let forces = self.contact_forces(self.seg.at(self.s.t));
+            sys.observe_sample(&self.s.stories, tracker, u, v, &forces);
         } else {
-            sys.observe(&r.stories, tracker, u);
+            sys.observe(&self.s.stories, tracker, u);
         }
-        tracker.sample(r.t, history);
-    };
-    sys.observe_overlaps(&mut overlaps, 0.0, &r.y[..n]);
-    observe(&r, &mut tracker, history.as_deref_mut(), sys.ground_at(0.0));
+    }
 
-    let n_int = sys.n_intervals(duration);
-    let bp = |i: usize| {
-        if i + 1 >= n_int {
-            duration
-        } else {
-            (i + 1) as f64 * sys.sample_dt
-        }
-    };
-    let mut interval = 0usize;
-    let mut seg = sys.segment(0);
-
-    r.restart(&seg, &mut dp.k[0]);
-    let mut h = {
-        let (stories, held, buf) = (&r.stories, &r.held, &mut r.buf);
-        let mut f =
-            |tt: f64, yy: &[f64], o: &mut [f64]| rhs(sys, stories, &seg, held, buf, tt, yy, o);
-        dp.initial_step(&mut f, r.t, &r.y.clone(), bp(0) - r.t)
-    };
-    r.stats.rhs_evaluations += 1;
-    let mut rejected_before = false;
-    let mut total_steps: u64 = 0;
-    let mut scratch = vec![0.0; dim];
-    let mut y_end = vec![0.0; dim];
-
-    while interval < n_int {
+    /// One step towards the record point `t_bp` (s), landing on it when within 1 %.
+    ///
+    /// First a held contact whose holding force is already tensile is released
+    /// ([`StepOutcome::Released`], no step). Otherwise one trial step; if accepted, the
+    /// earliest event on its dense output (closure, release, story kink) cuts it, `on_dense`
+    /// sees the part taken before the state moves on, the stories are committed at the new
+    /// state, the held contacts are projected to zero relative velocity and gap, and the
+    /// event is handled (impact law, release, kink count). Errors: step budget, step-size
+    /// underflow or a non-finite trial state, a singular contact system, the impact-rate
+    /// guard, a stall without persistent contact.
+    ///
+    /// Inlined into the driver's loop, its one caller (see [`events::earliest`]).
+    #[inline(always)]
+    pub fn step(
+        &mut self,
+        t_bp: f64,
+        on_dense: &mut dyn FnMut(&DenseStep),
+    ) -> Result<StepOutcome, SolverError> {
+        debug_assert!(
+            !self.stale,
+            "enter_segment is called after every record point"
+        );
+        let sys = self.p.sys;
         // A held contact whose force is already tensile is released before stepping.
-        if !r.held.set.is_empty() {
-            let (ratio, k) = r.held_force_ratio(&r.y, seg.at(r.t));
+        if !self.s.held.set.is_empty() {
+            let (ratio, k) = held::force_ratio(
+                &self.p,
+                &self.s.stories,
+                &self.s.held,
+                &self.s.y,
+                self.seg.at(self.s.t),
+            );
             if ratio < -1.0 {
-                let c = r.held.set[k];
-                r.release(c)?;
-                r.restart(&seg, &mut dp.k[0]);
-                continue;
+                let c = self.s.held.set[k];
+                self.release(c)?;
+                self.restart();
+                return Ok(StepOutcome::Released { contact: c });
             }
         }
-        let t = r.t;
-        let t_bp = bp(interval);
-        let mut hs = h;
+        let t = self.s.t;
+        let mut hs = self.h;
         let mut land = false;
         if t + 1.01 * hs >= t_bp {
             hs = t_bp - t;
             land = true;
         }
-        total_steps += 1;
-        if total_steps > limits.max_steps {
+        self.total_steps += 1;
+        if self.total_steps > self.cfg.max_steps {
             return Err(SolverError::StepBudget {
                 time: t,
-                steps: total_steps - 1,
-                limit: limits.max_steps,
+                steps: self.total_steps - 1,
+                limit: self.cfg.max_steps,
             });
         }
         let err = {
-            let (stories, held, buf) = (&r.stories, &r.held, &mut r.buf);
+            let (stories, held, buf, seg) =
+                (&self.s.stories, &self.s.held, &mut self.buf, &self.seg);
             let mut f =
-                |tt: f64, yy: &[f64], o: &mut [f64]| rhs(sys, stories, &seg, held, buf, tt, yy, o);
-            dp.try_step(&mut f, t, &r.y, hs)
+                |tt: f64, yy: &[f64], o: &mut [f64]| rhs(sys, stories, seg, held, buf, tt, yy, o);
+            self.dp.try_step(&mut f, t, &self.s.y, hs)
         };
-        r.stats.rhs_evaluations += 6;
-        let (ok, hnew) = dp.control(err, hs, rejected_before);
+        self.stats.rhs_evaluations += 6;
+        let (ok, hnew) = self.dp.control(err, hs, self.rejected_before);
         if !ok {
-            r.stats.rejected_steps += 1;
-            rejected_before = true;
-            h = hnew;
+            self.stats.rejected_steps += 1;
+            self.rejected_before = true;
+            self.h = hnew;
+            let h = hnew;
             let hmin = 1e-14 * (1.0 + t);
             if h < hmin {
                 if err.is_nan() {
@@ -706,7 +352,7 @@ pub(crate) fn run<'a>(
                         context: format!(
                             "the trial step of {hs:.3e} s produced a non-finite state \
                              (held contacts: {:?})",
-                            r.held.set
+                            self.s.held.set
                         ),
                     });
                 }
@@ -716,128 +362,47 @@ pub(crate) fn run<'a>(
                     min_step: hmin,
                     context: format!(
                         "error norm {err:.3e} after {} rejections; held contacts: {:?}",
-                        r.stats.rejected_steps, r.held.set
+                        self.stats.rejected_steps, self.s.held.set
                     ),
                 });
             }
-            continue;
+            return Ok(StepOutcome::Rejected);
         }
-        rejected_before = false;
-        dp.prepare_dense(t, &r.y, hs);
+        self.rejected_before = false;
+        self.dp.prepare_dense(t, &self.s.y, hs);
 
-        // --- event search on the dense output -------------------------------------------
-        // Root tolerance: 2ε·t in time (the momentum method's), in units of θ.
-        let th_tol = (2.0 * f64::EPSILON * (t + hs) + 1e-300) / hs;
-        let mut closures: Vec<(f64, usize)> = Vec::new();
-        for (ci, cd) in sys.contacts.iter().enumerate() {
-            if r.held.set.contains(&ci) {
-                continue;
-            }
-            if r.grazing[ci] && cd.rel(&r.y[..n]) - cd.gap < -r.pen[ci] {
-                r.grazing[ci] = false;
-            }
-            let shift = if r.grazing[ci] { r.pen[ci] } else { 0.0 };
-            let right = (!cd.wall).then_some(cd.r);
-            let f = |th: f64| kin(&dp, n, cd.l, right, cd.gap + shift, th);
-            let mut prev = f(0.0);
-            for j in 1..=EVENT_SAMPLES {
-                let (lo, hi) = (
-                    (j - 1) as f64 / EVENT_SAMPLES as f64,
-                    j as f64 / EVENT_SAMPLES as f64,
-                );
-                let cur = f(hi);
-                if let Some(th) =
-                    closure_in(f, lo, hi, prev, cur, th_tol, &mut r.stats.root_iterations)
-                {
-                    closures.push((th, ci));
-                    break;
-                }
-                prev = cur;
-            }
-        }
-        let mut release: Option<(f64, usize)> = None;
-        if !r.held.set.is_empty() {
-            let ratio = |th: f64, scratch: &mut [f64]| {
-                dp.dense_all(th, scratch);
-                r.held_force_ratio(scratch, seg.at(t + th * hs))
-            };
-            let mut th_a = 0.0;
-            let mut iters = 0;
-            for j in 1..=EVENT_SAMPLES {
-                let th_b = j as f64 / EVENT_SAMPLES as f64;
-                let (fb, kb) = ratio(th_b, &mut scratch);
-                if fb < -1.0 {
-                    let th = brent(
-                        |th| ratio(th, &mut scratch).0 + 1.0,
-                        th_a,
-                        th_b,
-                        th_tol,
-                        &mut iters,
-                    );
-                    release = Some((th, r.held.set[kb]));
-                    break;
-                }
-                th_a = th_b;
-            }
-            r.stats.root_iterations += iters;
-        }
-        let first_closure = closures.iter().map(|c| c.0).fold(f64::INFINITY, f64::min);
-        let event = match release {
-            Some((th, c)) if th <= first_closure => Some((th, Event::Release(c))),
-            _ if first_closure.is_finite() => {
-                let simultaneous = SIMULTANEOUS / hs;
-                let set: Vec<usize> = closures
-                    .iter()
-                    .filter(|(th, _)| *th <= first_closure + simultaneous)
-                    .map(|&(_, c)| c)
-                    .collect();
-                Some((first_closure, Event::Closure(set)))
-            }
-            _ => None,
-        };
-        // Kinks of yielding stories before the earliest contact event (the gap element's
-        // search, [`Stories::locate_kink`]): the step is cut there, so that no step
-        // straddles a kink of the story law.
-        let event = if r.stories.is_empty() {
-            event
-        } else {
-            let limit = event.as_ref().map_or(1.0, |(th, _)| *th);
-            match r
-                .stories
-                .locate_kink(&dp, 0, n, limit, &mut r.stats.root_iterations)
-            {
-                Some(k) => Some((k.theta, Event::Kink(k))),
-                None => event,
-            }
-        };
+        let event = events::earliest(
+            &self.p,
+            &mut self.s,
+            &self.dp,
+            &self.seg,
+            (t, hs),
+            &mut self.scratch,
+            &mut self.stats.root_iterations,
+        );
 
-        // --- peaks over the part of the step taken, then commit ------------------------
+        // --- the part of the step taken, shown to the driver; then the state moves on ----
         let th_end = event.as_ref().map_or(1.0, |(th, _)| th.min(1.0));
         if th_end < 1.0 {
-            dp.dense_all(th_end, &mut y_end);
+            self.dp.dense_all(th_end, &mut self.y_end);
         } else {
-            y_end.copy_from_slice(&dp.y1);
+            self.y_end.copy_from_slice(&self.dp.y1);
         }
-        dense_peaks(
-            sys,
-            &r.stories,
-            &dp,
-            &r.y,
-            &y_end,
+        on_dense(&DenseStep {
+            dp: &self.dp,
+            stories: &self.s.stories,
+            t,
+            y0: &self.s.y,
+            y1: &self.y_end,
             th_end,
-            &mut tracker,
-            &mut scratch,
-        );
-        if !overlaps.is_empty() {
-            dense_overlaps(sys, &dp, t, &r.y, &y_end, th_end, &mut overlaps);
-        }
+        });
         let full = th_end >= 1.0;
-        if full && event.is_none() && r.held.set.is_empty() {
-            dp.accept_full(&mut r.y);
+        if full && event.is_none() && self.s.held.set.is_empty() {
+            self.dp.accept_full(&mut self.s.y);
         } else {
-            r.y.copy_from_slice(&y_end);
+            self.s.y.copy_from_slice(&self.y_end);
         }
-        r.t = if full {
+        self.s.t = if full {
             if land {
                 t_bp
             } else {
@@ -846,65 +411,170 @@ pub(crate) fn run<'a>(
         } else {
             t + th_end * hs
         };
-        let taken = r.t - t;
+        let taken = self.s.t - t;
         if taken > 0.0 {
-            r.stats.min_step = r.stats.min_step.min(taken);
+            self.stats.min_step = self.stats.min_step.min(taken);
         }
-        r.stats.max_step = r.stats.max_step.max(taken);
-        r.stats.steps += 1;
-        h = hnew;
+        self.stats.max_step = self.stats.max_step.max(taken);
+        self.stats.steps += 1;
+        self.h = hnew;
 
-        let mut restart = !(full && event.is_none() && r.held.set.is_empty());
+        // The FSAL stage is stale unless the whole step was taken with nothing to handle.
+        let restart = !(full && event.is_none() && self.s.held.set.is_empty());
         // The accepted state: commit the yielding stories there (once the peaks over the
         // step, which need the start-of-step law, are taken).
         let kink = match &event {
             Some((_, Event::Kink(k))) => Some(*k),
             _ => None,
         };
-        r.commit(kink.as_ref());
+        self.commit(kink.as_ref());
         // Held contacts: relative velocity and gap back to zero after every step.
-        let held = r.held.set.clone();
-        r.project_held(&held)?;
-        let ag = seg.at(r.t);
-        match &event {
-            Some((_, Event::Release(c))) => r.release(*c)?,
-            Some((_, Event::Closure(set))) => r.impact(set, ag)?,
-            Some((_, Event::Kink(_))) => r.stats.story_kinks += 1,
-            None => {}
-        }
-        let landed = land && full;
-        if event.is_some() && !landed {
-            sys.observe_overlaps(&mut overlaps, r.t, &r.y[..n]);
-            observe(&r, &mut tracker, history.as_deref_mut(), ag);
-        }
-        if landed {
-            sys.observe_overlaps(&mut overlaps, r.t, &r.y[..n]);
-            observe(&r, &mut tracker, history.as_deref_mut(), ag);
-            interval += 1;
-            if interval < n_int {
-                let next = sys.segment(interval);
-                let (a_new, a_old) = (next.at(r.t), seg.at(r.t));
-                if (a_new - a_old).abs() > 1e-9 * (a_new.abs() + a_old.abs()) {
-                    restart = true;
+        let held = self.s.held.set.clone();
+        self.project_held(&held)?;
+        let ag = self.seg.at(self.s.t);
+        let breakpoint = land && full;
+        let outcome = match event {
+            Some((_, Event::Release(c))) => {
+                self.release(c)?;
+                StepOutcome::ContactOpened {
+                    contact: c,
+                    breakpoint,
                 }
-                seg = next;
             }
+            Some((_, Event::Closure(set))) => {
+                self.impact(&set, ag)?;
+                StepOutcome::Impact {
+                    contacts: set,
+                    breakpoint,
+                }
+            }
+            Some((_, Event::Kink(_))) => {
+                self.stats.story_kinks += 1;
+                StepOutcome::StoryKink { breakpoint }
+            }
+            None if breakpoint => StepOutcome::Breakpoint,
+            None => StepOutcome::Accepted,
+        };
+        if breakpoint {
+            self.stale = restart;
+        } else if restart {
+            self.restart();
         }
-        if restart {
-            r.restart(&seg, &mut dp.k[0]);
+        Ok(outcome)
+    }
+
+    /// At the record point reached: enters the next record interval, whose ground piece is
+    /// `next` (`None` after the last). The FSAL stage restarts once if the step that landed
+    /// here changed the state or the held set, or if the excitation jumps here (only where
+    /// the record ends).
+    pub fn enter_segment(&mut self, next: Option<Segment>) {
+        if let Some(next) = next {
+            let t = self.s.t;
+            let (a_new, a_old) = (next.at(t), self.seg.at(t));
+            if (a_new - a_old).abs() > 1e-9 * (a_new.abs() + a_old.abs()) {
+                self.stale = true;
+            }
+            self.seg = next;
+        }
+        if self.stale {
+            self.restart();
         }
     }
 
-    for (&c, &start) in r.held.set.iter().zip(&r.held.start) {
-        r.phases.push(PersistentContact {
-            contact: c,
-            start,
-            end: r.t,
-            released_by: "end of analysis".into(),
-        });
+    /// Ends the run: the contacts still held close their phases at the end of the analysis;
+    /// the energy audit (refused if the final state is not finite), the impacts, the
+    /// persistent phases, the statistics and the story state.
+    #[allow(clippy::type_complexity)]
+    pub fn finish(
+        mut self,
+    ) -> Result<
+        (
+            Vec<Impact>,
+            Vec<PersistentContact>,
+            EnergyAudit,
+            Stats,
+            Stories,
+        ),
+        SolverError,
+    > {
+        for (&c, &start) in self.s.held.set.iter().zip(&self.s.held.start) {
+            self.phases.push(PersistentContact {
+                contact: c,
+                start,
+                end: self.s.t,
+                released_by: "end of analysis".into(),
+            });
+        }
+        if self.stats.min_step == f64::INFINITY {
+            self.stats.min_step = 0.0;
+        }
+        let sys = self.p.sys;
+        let n = sys.n;
+        let y = &self.s.y;
+        if !y.iter().all(|x| x.is_finite()) {
+            return Err(SolverError::NonFinite {
+                time: self.s.t,
+                context: "floor state at the end of the analysis".into(),
+            });
+        }
+        let mut stories0 = sys.stories();
+        stories0.start(&sys.u0, &sys.v0);
+        let initial = sys.mech_energy(&stories0, &sys.u0, &sys.v0);
+        let final_ = sys.mech_energy(&self.s.stories, &y[..n], &y[n..2 * n]);
+        let (input, damping) = (y[2 * n], y[2 * n + 1]);
+        let contact = y[2 * n + 2] + self.contact_loss;
+        let hysteretic = self.s.stories.hysteretic_energy();
+        let energy = EnergyAudit {
+            initial,
+            input,
+            damping,
+            contact,
+            hysteretic,
+            final_,
+            balance_error: initial + input - damping - contact - hysteretic - final_,
+        };
+        Ok((
+            self.impacts,
+            self.phases,
+            energy,
+            self.stats,
+            self.s.stories,
+        ))
     }
-    if r.stats.min_step == f64::INFINITY {
-        r.stats.min_step = 0.0;
+
+    /// Kinetic energy ½ vᵀ M v, J.
+    pub(super) fn kinetic(&self) -> f64 {
+        let n = self.p.sys.n;
+        0.5 * self.s.y[n..2 * n]
+            .iter()
+            .zip(&self.p.sys.mass)
+            .map(|(v, m)| m * v * v)
+            .sum::<f64>()
     }
-    Ok((r, tracker, overlaps))
+
+    /// Relative velocity u̇_l − u̇_r of contact c, m/s.
+    pub(super) fn rel_velocity(&self, c: usize) -> f64 {
+        let n = self.p.sys.n;
+        self.p.sys.contacts[c].rel(&self.s.y[n..2 * n])
+    }
+
+    /// Commits the yielding stories at the current state (`kink`: the story kink located
+    /// at this state, if any). Called for every accepted state and after every change of the
+    /// state by an event (impulse, projection), never for a trial.
+    pub(super) fn commit(&mut self, kink: Option<&Kink>) {
+        let n = self.p.sys.n;
+        self.s
+            .stories
+            .commit(&self.s.y[..n], &self.s.y[n..2 * n], kink);
+    }
+
+    /// Mechanical energy (kinetic + recoverable strain) plus the hysteretic energy
+    /// dissipated so far, J, with the committed story state.
+    pub(super) fn energy_with_hysteresis(&self) -> f64 {
+        let n = self.p.sys.n;
+        self.p
+            .sys
+            .mech_energy(&self.s.stories, &self.s.y[..n], &self.s.y[n..2 * n])
+            + self.s.stories.hysteretic_energy()
+    }
 }

@@ -1,0 +1,94 @@
+//! What one step of a time stepper did: the [`StepOutcome`] shared by the gap element's
+//! integrators ([`crate::gap::adaptive`], [`crate::gap::newmark`]) and the impulse method
+//! ([`crate::impulse`]).
+//!
+//! The shape (issue 10): a stepper owns the integration state and advances it by one step,
+//! reporting what happened; one driver per solver owns the loop (over the record intervals,
+//! or over the fixed steps), the response tracker (peaks, samples, history) and the overlap
+//! audit, and reacts to the outcome: nothing moved (a rejected step, or a release at the
+//! step start), a plain step, a record point reached, an event (the state there is
+//! sampled), the end of the analysis. The momentum method's `momentum::Step` is the same
+//! idea over its exact modal segments (kept apart: its segments, impacts and persistent
+//! phases are its own).
+//!
+//! One enum for the three steppers rather than one each: most variants are shared, and the
+//! few a stepper never reports are `unreachable!` in its driver. The contacts of an event
+//! are one located contact (adaptive: events are located one at a time), a set
+//! (impulse: closures within the simultaneity window are resolved together) or two sets
+//! (Newmark judges every contact from the step's end state, so in one step some may close
+//! while others open).
+//!
+//! Which stepper reports which outcome:
+//!
+//! | outcome | adaptive | Newmark | impulse |
+//! |---|---|---|---|
+//! | `Rejected` | error test failed | – | error test failed |
+//! | `Accepted`, `Breakpoint` | ✓ | `Accepted` (no contact changed) | ✓ |
+//! | `ContactClosed` | located closure | – | – |
+//! | `ContactOpened` | located opening | – | located release of a held contact |
+//! | `StoryKink` | located kink | – (kinks not located) | located kink |
+//! | `Impact` | – | – | located closures, resolved by the impact law |
+//! | `Released` | – | – | a held contact released at the step start |
+//! | `ContactsChanged` | – | closures and openings of the step | – |
+//! | `Finished` | – | the last step was taken before the call | – |
+//!
+//! The adaptive and impulse drivers own the record points and stop after the last one; the
+//! Newmark stepper counts its fixed steps and says when they are done.
+
+/// What one call of a stepper's `step` did. `breakpoint`: the step ended on the record
+/// point it was given.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) enum StepOutcome {
+    /// The trial step failed the error test: nothing moved, the next try is shorter.
+    Rejected,
+    /// The whole step was taken, ending inside the record interval (Newmark: a step in
+    /// which no contact changed state).
+    Accepted,
+    /// The whole step was taken and ended on the record point.
+    Breakpoint,
+    /// The step was cut at (or ended with) the closure of contact `contact`.
+    ContactClosed { contact: usize, breakpoint: bool },
+    /// The step was cut at (or ended with) the opening of contact `contact` (the impulse
+    /// method: the release of a held contact whose holding force turned tensile).
+    ContactOpened { contact: usize, breakpoint: bool },
+    /// The step was cut at a story kink (yield or unloading) before any contact event; the
+    /// stories were committed there.
+    StoryKink { breakpoint: bool },
+    /// The impulse method: the step was cut where `contacts` close (within the simultaneity
+    /// window of each other) and the impact law resolved them (impulses, contacts joining
+    /// the held set, grazes).
+    Impact {
+        contacts: Vec<usize>,
+        breakpoint: bool,
+    },
+    /// The impulse method: the holding force of held contact `contact` was already tensile
+    /// at the step start; it was released there and no step was taken (the state did not
+    /// move).
+    Released { contact: usize },
+    /// A fixed step (Newmark) in which contacts changed state, judged at its end: `closed`
+    /// began carrying force, `opened` stopped (either may be empty, not both).
+    ContactsChanged {
+        closed: Vec<usize>,
+        opened: Vec<usize>,
+    },
+    /// The last step had already been taken: nothing moved.
+    Finished,
+}
+
+impl StepOutcome {
+    /// Whether the step ended on the record point.
+    pub fn at_breakpoint(&self) -> bool {
+        match self {
+            StepOutcome::Rejected
+            | StepOutcome::Accepted
+            | StepOutcome::Released { .. }
+            | StepOutcome::ContactsChanged { .. }
+            | StepOutcome::Finished => false,
+            StepOutcome::Breakpoint => true,
+            StepOutcome::ContactClosed { breakpoint, .. }
+            | StepOutcome::ContactOpened { breakpoint, .. }
+            | StepOutcome::StoryKink { breakpoint }
+            | StepOutcome::Impact { breakpoint, .. } => *breakpoint,
+        }
+    }
+}
