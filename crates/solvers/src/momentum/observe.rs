@@ -124,30 +124,19 @@ impl Stepper<'_> {
     fn envelope(&mut self, len: f64) -> bool {
         self.skip.fill(false);
         if !(len > 0.0) || self.history.is_some() || self.interval.fc.is_some() {
+            self.env_e2_fresh = false;
             return false;
         }
         let (p, iv) = (self.p, &self.interval);
         let amax = iv.a0.abs().max(iv.a1.abs());
         let mut any = false;
+        let fresh = std::mem::take(&mut self.env_e2_fresh);
         for (b, bm) in p.modal.buildings.iter().enumerate() {
-            let r = bm.range.clone();
-            let (x, v, w2) = (&iv.x0[r.clone()], &iv.v0[r.clone()], &p.omega2[r]);
-            // Four partial sums (the order does not matter: the margin below covers it).
-            let mut acc = [0.0f64; 4];
-            let n4 = x.len() / 4 * 4;
-            for ((xc, vc), wc) in x[..n4]
-                .chunks_exact(4)
-                .zip(v[..n4].chunks_exact(4))
-                .zip(w2[..n4].chunks_exact(4))
-            {
-                for k in 0..4 {
-                    acc[k] += vc[k] * vc[k] + wc[k] * xc[k] * xc[k];
-                }
-            }
-            for n in n4..x.len() {
-                acc[0] += v[n] * v[n] + w2[n] * x[n] * x[n];
-            }
-            let e2 = (acc[0] + acc[1]) + (acc[2] + acc[3]);
+            let e2 = if fresh {
+                self.env_e2[b]
+            } else {
+                twice_energy(&iv.x0, &iv.v0, &p.omega2, bm.range.clone())
+            };
             // A relative margin of 1e-9 covers the round-off of the bound itself.
             let rb = (e2.sqrt() + len * self.env_gamma[b] * amax) * (1.0 + 1e-9);
             self.env_r[b] = rb;
@@ -429,6 +418,29 @@ impl Stepper<'_> {
         }
         self.deferred.candidates.clear();
     }
+}
+
+/// 2E = Σ_n (q̇_n² + ω_n² q_n²) over the modes `r` (four partial sums over chunks of 4
+/// modes from the range start, the tail into the first; the order does not matter for the
+/// bounds that use it, whose margins cover the round-off).
+#[inline(always)]
+pub(super) fn twice_energy(x: &[f64], v: &[f64], w2: &[f64], r: std::ops::Range<usize>) -> f64 {
+    let (x, v, w2) = (&x[r.clone()], &v[r.clone()], &w2[r]);
+    let mut acc = [0.0f64; 4];
+    let n4 = x.len() / 4 * 4;
+    for ((xc, vc), wc) in x[..n4]
+        .chunks_exact(4)
+        .zip(v[..n4].chunks_exact(4))
+        .zip(w2[..n4].chunks_exact(4))
+    {
+        for k in 0..4 {
+            acc[k] += vc[k] * vc[k] + wc[k] * xc[k] * xc[k];
+        }
+    }
+    for n in n4..x.len() {
+        acc[0] += v[n] * v[n] + w2[n] * x[n] * x[n];
+    }
+    (acc[0] + acc[1]) + (acc[2] + acc[3])
 }
 
 /// max(|y0|, |y1|) + c (|ẏ0| + |ẏ1|), c = 4/27·len: a bound of the cubic Hermite

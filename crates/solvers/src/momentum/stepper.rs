@@ -150,6 +150,10 @@ pub struct Stepper<'a> {
     pub(super) overlap_inv: Vec<f64>,
     pub(super) env_r: Vec<f64>,
     pub(super) skip: Vec<bool>,
+    /// 2E_b per building at the start of the interval being observed, when the fast path
+    /// computed it (`env_e2_fresh`) for its contact bound.
+    pub(super) env_e2: Vec<f64>,
+    pub(super) env_e2_fresh: bool,
 }
 
 impl<'a> Stepper<'a> {
@@ -292,6 +296,8 @@ impl<'a> Stepper<'a> {
             overlap_inv: Vec::new(),
             env_r: vec![0.0; p.modal.buildings.len()],
             skip: vec![false; p.modal.buildings.len()],
+            env_e2: vec![0.0; p.modal.buildings.len()],
+            env_e2_fresh: false,
             coef: vec![
                 0.0;
                 p.modal
@@ -561,26 +567,15 @@ impl<'a> Stepper<'a> {
         // Rigorous skip of far contacts: d√(2E)/dt ≤ |f| (modal load norm), so over the step
         // |δ̇| ≤ √W_c (√(2E₀) + h |a_g|max √ΣΓ²) and δ(s) ≤ δ₀ + s·max|δ̇| < 0 if δ₀ is
         // below −h times that bound.
-        let e2 = {
-            let nm = self.s.x.len();
-            let (x, v, w2) = (&self.s.x[..nm], &self.s.v[..nm], &p.omega2[..nm]);
-            // Four interleaved partial sums (acc[n % 4]), as chunks of 4 modes.
-            let mut acc = [0.0f64; 4];
-            let n4 = nm / 4 * 4;
-            for ((xc, vc), wc) in x[..n4]
-                .chunks_exact(4)
-                .zip(v[..n4].chunks_exact(4))
-                .zip(w2[..n4].chunks_exact(4))
-            {
-                for k in 0..4 {
-                    acc[k] += vc[k] * vc[k] + wc[k] * xc[k] * xc[k];
-                }
-            }
-            for n in n4..nm {
-                acc[n % 4] += v[n] * v[n] + w2[n] * x[n] * x[n];
-            }
-            acc.iter().sum::<f64>()
-        };
+        // Per building 2E_b = Σ (q̇² + ω² q²) over its modes (kept for the observation's
+        // energy envelope of this interval), and their sum for the contact bound.
+        let mut e2 = 0.0;
+        for (b, bm) in p.modal.buildings.iter().enumerate() {
+            let e = super::observe::twice_energy(&self.s.x, &self.s.v, &p.omega2, bm.range.clone());
+            self.env_e2[b] = e;
+            e2 += e;
+        }
+        self.env_e2_fresh = true;
         let vbound = e2.sqrt() + h * a0.abs().max(a1.abs()) * p.gamma_norm;
         let sub = p.sub;
         let mut arcs_built = false;
