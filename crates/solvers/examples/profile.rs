@@ -15,5 +15,8 @@ fn main() {
     for _ in 0..n {
         steps += solvers::run(&s, method, None).unwrap().stats.steps;
     }
-    eprintln!("{:.3} ms per run ({steps} steps)", t.elapsed().as_secs_f64() * 1e3 / n as f64);
+    eprintln!(
+        "{:.3} ms per run ({steps} steps)",
+        t.elapsed().as_secs_f64() * 1e3 / n as f64
+    );
 }

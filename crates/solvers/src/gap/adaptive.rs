@@ -89,51 +89,267 @@ pub(crate) fn locate(mut f: impl FnMut(f64) -> f64, a: f64, b: f64, calls: &mut 
     }
 }
 
-/// Right-hand side with the contact modes and the committed story state frozen.
-#[inline]
-fn rhs(
-    sys: &System,
-    stories: &Stories,
-    seg: &Segment,
-    modes: &[Mode],
-    t: f64,
-    y: &[f64],
-    o: &mut [f64],
-) {
-    let n = sys.n;
-    let (u, rest) = y.split_at(n);
-    let v = &rest[..n];
-    let (ou, orest) = o.split_at_mut(n);
-    ou.copy_from_slice(v);
-    let (acc, extra) = orest.split_at_mut(n);
-    let pdamp = sys.internal(stories, u, v, acc);
-    let ag = seg.at(t);
-    let mut pin = 0.0;
-    for i in 0..n {
-        let f = sys.mass[i] * ag;
-        acc[i] -= f;
-        pin -= f * v[i];
-    }
-    let mut pc = 0.0;
-    for (ci, c) in sys.contacts.iter().enumerate() {
-        let m = modes[ci];
-        if m.closed {
-            let d = c.rel(u) - c.gap;
-            let dd = c.rel(v);
-            let f = c.law.force(d, dd, m.v_close);
-            c.push_apart(acc, f);
-            pc += f * dd;
-            extra[3 + ci] = f;
-        } else {
-            extra[3 + ci] = 0.0;
+/// One building of [`Rhs`], its rows in panels of 4 (the last one zero-padded).
+#[derive(Debug, Clone)]
+struct PanelBlock {
+    /// First floor (global index) and number of floors.
+    off: usize,
+    len: usize,
+    /// Rows rounded up to whole panels: 4·⌈len/4⌉.
+    lp: usize,
+    /// Story stiffness k_j and floor mass m_j, zero-padded to `lp`.
+    k: Vec<f64>,
+    m: Vec<f64>,
+    /// The damping matrix in groups of up to [`GROUP`] panels: (panels in the group, data
+    /// laid out [column j][panel][row r]) holding `Block::c[j·len + 4p + r]`, the entry the
+    /// column sweep of `System::internal` multiplies by v_j for row 4p + r (zero past the
+    /// last row).
+    groups: Vec<(usize, Vec<[f64; 4]>)>,
+}
+
+/// Panels of 4 rows whose C v columns are summed together (4 accumulators: 16 rows).
+const GROUP: usize = 4;
+
+/// The adaptive integrator's right-hand side, laid out for vector instructions:
+///
+/// ```text
+/// u̇ = v
+/// v̇ = M⁻¹ (−f_s(u) − C v − M 1 a_g(t) + Σ_closed F_c (e_right − e_left))
+/// Ė_input = −Σ_i m_i a_g v_i,  Ė_damping = vᵀ C v,  Ẇ_contact = Σ_closed F_c δ̇_c
+/// İ_c = F_c (closed contacts; 0 when open)
+/// ```
+///
+/// with the contact modes and the committed story state frozen. The same arithmetic as
+/// `System::internal` followed by the ground load, the contact forces and M⁻¹, in the same
+/// order (bit-identical results): per floor i of a building
+/// a_i = (((−s_i) + s_{i+1}) − (C v)_i) − m_i a_g, with the story forces s_j = k_j (u_j −
+/// u_{j−1}) (or the story law's) and s_len = −0 (so the top floor gets −s_top exactly), each
+/// (C v)_i summed over the columns j in order from 0; the energy rates summed floor by floor
+/// in the same order. The floors of a building are processed in panels of 4 rows held in
+/// vector registers (AVX2 where available, [`pulp::Arch`]; no fused multiply-add), and the
+/// work buffers are allocated once.
+#[derive(Debug, Clone)]
+pub(crate) struct Rhs {
+    arch: pulp::Arch,
+    blocks: Vec<PanelBlock>,
+    /// Work buffers of the largest building, `lp` (+ 1 or + 4) long: displacements with the
+    /// ground in front (u_pad[0] = 0, u_pad[1 + j] = u_j), velocities, story forces, C v,
+    /// the accelerations before M⁻¹ and the products v_i (C v)_i and m_i a_g v_i.
+    u_pad: Vec<f64>,
+    v_pad: Vec<f64>,
+    s: Vec<f64>,
+    cv: Vec<[f64; 4]>,
+    a: Vec<f64>,
+    pd: Vec<f64>,
+    pg: Vec<f64>,
+}
+
+impl Rhs {
+    pub(crate) fn new(sys: &System) -> Rhs {
+        let mut blocks = Vec::with_capacity(sys.blocks.len());
+        let mut lp_max = 0;
+        for b in &sys.blocks {
+            let (off, len) = (b.off, b.len);
+            let panels = len.div_ceil(4);
+            let lp = 4 * panels;
+            lp_max = lp_max.max(lp);
+            let pad = |x: &[f64]| {
+                let mut v = x[off..off + len].to_vec();
+                v.resize(lp, 0.0);
+                v
+            };
+            let mut groups = Vec::new();
+            let mut p0 = 0;
+            while p0 < panels {
+                let g = GROUP.min(panels - p0);
+                let mut data = Vec::with_capacity(len * g);
+                for j in 0..len {
+                    for p in p0..p0 + g {
+                        data.push(std::array::from_fn(|r| {
+                            let row = 4 * p + r;
+                            if row < len {
+                                b.c[j * len + row]
+                            } else {
+                                0.0
+                            }
+                        }));
+                    }
+                }
+                groups.push((g, data));
+                p0 += g;
+            }
+            blocks.push(PanelBlock {
+                off,
+                len,
+                lp,
+                k: pad(&sys.story_k),
+                m: pad(&sys.mass),
+                groups,
+            });
+        }
+        let z = |extra: usize| vec![0.0; lp_max + extra];
+        Rhs {
+            arch: pulp::Arch::new(),
+            blocks,
+            u_pad: z(1),
+            v_pad: z(0),
+            s: z(4),
+            cv: vec![[0.0; 4]; lp_max / 4],
+            a: z(0),
+            pd: z(0),
+            pg: z(0),
         }
     }
-    for i in 0..n {
-        acc[i] *= sys.inv_mass[i];
+
+    /// Evaluates f(t, y) into `o` (module docs of [`Rhs`]).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn eval(
+        &mut self,
+        sys: &System,
+        stories: &Stories,
+        seg: &Segment,
+        modes: &[Mode],
+        t: f64,
+        y: &[f64],
+        o: &mut [f64],
+    ) {
+        struct Op<'r, 'a> {
+            rhs: &'r mut Rhs,
+            sys: &'a System,
+            stories: &'a Stories,
+            ag: f64,
+            modes: &'a [Mode],
+            y: &'a [f64],
+            o: &'a mut [f64],
+        }
+        impl pulp::WithSimd for Op<'_, '_> {
+            type Output = ();
+            #[inline(always)]
+            fn with_simd<S: pulp::Simd>(self, _: S) {
+                self.rhs
+                    .eval_body(self.sys, self.stories, self.ag, self.modes, self.y, self.o)
+            }
+        }
+        let arch = self.arch;
+        arch.dispatch(Op {
+            rhs: self,
+            sys,
+            stories,
+            ag: seg.at(t),
+            modes,
+            y,
+            o,
+        });
     }
-    extra[0] = pin;
-    extra[1] = pdamp;
-    extra[2] = pc;
+
+    #[inline(always)]
+    fn eval_body(
+        &mut self,
+        sys: &System,
+        stories: &Stories,
+        ag: f64,
+        modes: &[Mode],
+        y: &[f64],
+        o: &mut [f64],
+    ) {
+        let n = sys.n;
+        let (u, rest) = y.split_at(n);
+        let v = &rest[..n];
+        let (ou, orest) = o.split_at_mut(n);
+        ou.copy_from_slice(v);
+        let (acc, extra) = orest.split_at_mut(n);
+        let (mut pdamp, mut pin) = (0.0, 0.0);
+        for (bi, b) in self.blocks.iter().enumerate() {
+            let (off, len, lp) = (b.off, b.len, b.lp);
+            let u_pad = &mut self.u_pad[..lp + 1];
+            let v_pad = &mut self.v_pad[..lp];
+            u_pad[0] = 0.0;
+            u_pad[1..=len].copy_from_slice(&u[off..off + len]);
+            v_pad[..len].copy_from_slice(&v[off..off + len]);
+            // Story forces s_j on the drifts u_j − u_{j−1} (u_{−1} = 0: the ground). Rows
+            // past `len` hold whatever the buffers hold: they are computed and never read.
+            let s = &mut self.s[..lp + 1];
+            if stories.yielding(bi) {
+                for j in 0..len {
+                    s[j] = stories.story_force(bi, j, u_pad[j + 1] - u_pad[j]).0;
+                }
+            } else {
+                let k = &b.k[..lp];
+                for j in 0..lp {
+                    s[j] = k[j] * (u_pad[j + 1] - u_pad[j]);
+                }
+            }
+            s[len] = -0.0;
+            // C v, panel group by panel group.
+            let cv = &mut self.cv[..lp / 4];
+            let mut p0 = 0;
+            for (g, data) in &b.groups {
+                let out = &mut cv[p0..p0 + g];
+                match g {
+                    4 => cv_group::<4>(data, &v_pad[..len], out),
+                    3 => cv_group::<3>(data, &v_pad[..len], out),
+                    2 => cv_group::<2>(data, &v_pad[..len], out),
+                    _ => cv_group::<1>(data, &v_pad[..len], out),
+                }
+                p0 += g;
+            }
+            let cv = cv.as_flattened();
+            let (a, pd, pg, m) = (
+                &mut self.a[..lp],
+                &mut self.pd[..lp],
+                &mut self.pg[..lp],
+                &b.m[..lp],
+            );
+            let (s0, s1) = (&s[..lp], &s[1..lp + 1]);
+            for i in 0..lp {
+                let f = m[i] * ag;
+                a[i] = ((-s0[i] + s1[i]) - cv[i]) - f;
+                pd[i] = v_pad[i] * cv[i];
+                pg[i] = f * v_pad[i];
+            }
+            for i in 0..len {
+                pdamp += pd[i];
+                pin -= pg[i];
+            }
+            acc[off..off + len].copy_from_slice(&a[..len]);
+        }
+        let mut pc = 0.0;
+        for (ci, c) in sys.contacts.iter().enumerate() {
+            let m = modes[ci];
+            if m.closed {
+                let d = c.rel(u) - c.gap;
+                let dd = c.rel(v);
+                let f = c.law.force(d, dd, m.v_close);
+                c.push_apart(acc, f);
+                pc += f * dd;
+                extra[3 + ci] = f;
+            } else {
+                extra[3 + ci] = 0.0;
+            }
+        }
+        let inv_mass = &sys.inv_mass[..n];
+        for i in 0..n {
+            acc[i] *= inv_mass[i];
+        }
+        extra[0] = pin;
+        extra[1] = pdamp;
+        extra[2] = pc;
+    }
+}
+
+/// (C v) of the `G` panels of one group ([`PanelBlock::groups`]): each row's sum over the
+/// columns in order from 0, starting from 0 (the sums of `System::internal`).
+#[inline(always)]
+fn cv_group<const G: usize>(data: &[[f64; 4]], v: &[f64], out: &mut [[f64; 4]]) {
+    let mut acc = [[0.0f64; 4]; G];
+    for (c, &vj) in data.chunks_exact(G).zip(v) {
+        for g in 0..G {
+            for r in 0..4 {
+                acc[g][r] += c[g][r] * vj;
+            }
+        }
+    }
+    out[..G].copy_from_slice(&acc);
 }
 
 /// Observes the state `y` for peaks and, when a history is kept, for its next sample (with
@@ -251,6 +467,7 @@ pub(crate) struct DenseStep<'a> {
 /// other than the one it is told to stop at.
 pub(crate) struct GapStepper<'a> {
     sys: &'a System,
+    rhs: Rhs,
     dp: Dopri5,
     y: Vec<f64>,
     t: f64,
@@ -327,12 +544,14 @@ impl<'a> GapStepper<'a> {
 
         let seg = sys.segment(0);
         let t = 0.0f64;
-        rhs(sys, &stories, &seg, ledger.modes(), t, &y, &mut dp.k[0]);
+        let mut rhs = Rhs::new(sys);
+        rhs.eval(sys, &stories, &seg, ledger.modes(), t, &y, &mut dp.k[0]);
         stats.rhs_evaluations += 1;
         let h = {
             let modes = ledger.modes();
-            let mut f =
-                |tt: f64, yy: &[f64], o: &mut [f64]| rhs(sys, &stories, &seg, modes, tt, yy, o);
+            let mut f = |tt: f64, yy: &[f64], o: &mut [f64]| {
+                rhs.eval(sys, &stories, &seg, modes, tt, yy, o)
+            };
             let cap0 = caps.iter().cloned().fold(f64::INFINITY, f64::min);
             match first_step {
                 Some(h0) => h0,
@@ -342,6 +561,7 @@ impl<'a> GapStepper<'a> {
         stats.rhs_evaluations += 1;
         GapStepper {
             sys,
+            rhs,
             dp,
             y,
             t,
@@ -400,6 +620,7 @@ impl<'a> GapStepper<'a> {
         let nc = sys.contacts.len();
         let imp0 = 2 * n + 3;
         let GapStepper {
+            rhs,
             dp,
             y,
             ledger,
@@ -437,7 +658,7 @@ impl<'a> GapStepper<'a> {
             let stories: &Stories = stories;
             let seg: &Segment = seg;
             let mut f =
-                |tt: f64, yy: &[f64], o: &mut [f64]| rhs(sys, stories, seg, modes, tt, yy, o);
+                |tt: f64, yy: &[f64], o: &mut [f64]| rhs.eval(sys, stories, seg, modes, tt, yy, o);
             dp.try_step(&mut f, t, y, hs)
         };
         stats.rhs_evaluations += 6;
@@ -523,7 +744,7 @@ impl<'a> GapStepper<'a> {
             t += k.theta * hs;
             stories.commit(&y[..n], &y[n..2 * n], Some(&k));
             stats.story_kinks += 1;
-            rhs(sys, stories, seg, ledger.modes(), t, y, &mut self.dp.k[0]);
+            rhs.eval(sys, stories, seg, ledger.modes(), t, y, &mut self.dp.k[0]);
             stats.rhs_evaluations += 1;
             outcome = StepOutcome::StoryKink {
                 breakpoint: land && t == t_bp,
@@ -558,7 +779,7 @@ impl<'a> GapStepper<'a> {
                     }
                     stats.events += 1;
                     stories.commit(&y[..n], &y[n..2 * n], None);
-                    rhs(sys, stories, seg, ledger.modes(), t, y, &mut self.dp.k[0]);
+                    rhs.eval(sys, stories, seg, ledger.modes(), t, y, &mut self.dp.k[0]);
                     stats.rhs_evaluations += 1;
                 }
                 None => {
@@ -593,7 +814,7 @@ impl<'a> GapStepper<'a> {
         let jump = (a_new - a_old).abs() > 1e-9 * (a_new.abs() + a_old.abs());
         self.seg = next;
         if jump {
-            rhs(
+            self.rhs.eval(
                 self.sys,
                 &self.stories,
                 &self.seg,
