@@ -89,26 +89,32 @@ pub(crate) fn locate(mut f: impl FnMut(f64) -> f64, a: f64, b: f64, calls: &mut 
     }
 }
 
-/// One building of [`Rhs`], its rows in panels of 4 (the last one zero-padded).
+/// One building of [`Rhs`], its floors in panels of 4 rows (the last one zero-padded).
 #[derive(Debug, Clone)]
 struct PanelBlock {
     /// First floor (global index) and number of floors.
     off: usize,
     len: usize,
-    /// Rows rounded up to whole panels: 4·⌈len/4⌉.
-    lp: usize,
-    /// Story stiffness k_j and floor mass m_j, zero-padded to `lp`.
-    k: Vec<f64>,
-    m: Vec<f64>,
+    /// Per panel: story stiffness k_j of the panel's rows, of the rows above (k_{j+1}) and
+    /// floor mass m_j (zero past the top).
+    k: Vec<[f64; 4]>,
+    k_next: Vec<[f64; 4]>,
+    m: Vec<[f64; 4]>,
     /// The damping matrix in groups of up to [`GROUP`] panels: (panels in the group, data
     /// laid out [column j][panel][row r]) holding `Block::c[j·len + 4p + r]`, the entry the
     /// column sweep of `System::internal` multiplies by v_j for row 4p + r (zero past the
-    /// last row).
+    /// top).
     groups: Vec<(usize, Vec<[f64; 4]>)>,
 }
 
 /// Panels of 4 rows whose C v columns are summed together (4 accumulators: 16 rows).
 const GROUP: usize = 4;
+
+/// Four consecutive entries of `x` from `i`.
+#[inline(always)]
+fn quad(x: &[f64], i: usize) -> [f64; 4] {
+    x[i..i + 4].try_into().unwrap()
+}
 
 /// The adaptive integrator's right-hand side, laid out for vector instructions:
 ///
@@ -123,41 +129,42 @@ const GROUP: usize = 4;
 /// `System::internal` followed by the ground load, the contact forces and M⁻¹, in the same
 /// order (bit-identical results): per floor i of a building
 /// a_i = (((−s_i) + s_{i+1}) − (C v)_i) − m_i a_g, with the story forces s_j = k_j (u_j −
-/// u_{j−1}) (or the story law's) and s_len = −0 (so the top floor gets −s_top exactly), each
-/// (C v)_i summed over the columns j in order from 0; the energy rates summed floor by floor
-/// in the same order. The floors of a building are processed in panels of 4 rows held in
-/// vector registers (AVX2 where available, [`pulp::Arch`]; no fused multiply-add), and the
-/// work buffers are allocated once.
+/// u_{j−1}) (u_{−1} = 0; or the story law's) and s_len = −0 (so the top floor gets −s_top
+/// exactly), each (C v)_i summed over the columns j in order from 0 starting from 0; the
+/// energy rates summed floor by floor in the same order. The floors of a building are
+/// processed in panels of 4 rows held in vector registers (AVX2 where available,
+/// [`pulp::Arch`]; no fused multiply-add).
+///
+/// A panel reads and writes 4 rows even past a building's top floor: the state has at
+/// least 2n + 3 components, so the rows read (floor i ≤ n + 2 of u or v) exist, and the
+/// rows written past the top land on the next building's first floors (written after) or
+/// on the energy rates (written last); they are never used.
 #[derive(Debug, Clone)]
 pub(crate) struct Rhs {
     arch: pulp::Arch,
     blocks: Vec<PanelBlock>,
-    /// Work buffers of the largest building, `lp` (+ 1 or + 4) long: displacements with the
-    /// ground in front (u_pad[0] = 0, u_pad[1 + j] = u_j), velocities, story forces, C v,
-    /// the accelerations before M⁻¹ and the products v_i (C v)_i and m_i a_g v_i.
-    u_pad: Vec<f64>,
-    v_pad: Vec<f64>,
-    s: Vec<f64>,
+    /// Work buffers: C v of a building's panels; its story forces s_j with s_len = −0
+    /// (yielding buildings only); the products v_i (C v)_i and m_i a_g v_i of its floors.
     cv: Vec<[f64; 4]>,
-    a: Vec<f64>,
-    pd: Vec<f64>,
-    pg: Vec<f64>,
+    s: Vec<f64>,
+    pd: Vec<[f64; 4]>,
+    pg: Vec<[f64; 4]>,
 }
 
 impl Rhs {
     pub(crate) fn new(sys: &System) -> Rhs {
         let mut blocks = Vec::with_capacity(sys.blocks.len());
-        let mut lp_max = 0;
+        let mut panels_max = 0;
         for b in &sys.blocks {
             let (off, len) = (b.off, b.len);
             let panels = len.div_ceil(4);
-            let lp = 4 * panels;
-            lp_max = lp_max.max(lp);
-            let pad = |x: &[f64]| {
-                let mut v = x[off..off + len].to_vec();
-                v.resize(lp, 0.0);
-                v
+            panels_max = panels_max.max(panels);
+            let quads = |x: &dyn Fn(usize) -> f64| -> Vec<[f64; 4]> {
+                (0..panels)
+                    .map(|p| std::array::from_fn(|r| x(4 * p + r)))
+                    .collect()
             };
+            let row = |x: &[f64], j: usize| if j < len { x[off + j] } else { 0.0 };
             let mut groups = Vec::new();
             let mut p0 = 0;
             while p0 < panels {
@@ -166,9 +173,9 @@ impl Rhs {
                 for j in 0..len {
                     for p in p0..p0 + g {
                         data.push(std::array::from_fn(|r| {
-                            let row = 4 * p + r;
-                            if row < len {
-                                b.c[j * len + row]
+                            let i = 4 * p + r;
+                            if i < len {
+                                b.c[j * len + i]
                             } else {
                                 0.0
                             }
@@ -181,23 +188,19 @@ impl Rhs {
             blocks.push(PanelBlock {
                 off,
                 len,
-                lp,
-                k: pad(&sys.story_k),
-                m: pad(&sys.mass),
+                k: quads(&|j| row(&sys.story_k, j)),
+                k_next: quads(&|j| row(&sys.story_k, j + 1)),
+                m: quads(&|j| row(&sys.mass, j)),
                 groups,
             });
         }
-        let z = |extra: usize| vec![0.0; lp_max + extra];
         Rhs {
             arch: pulp::Arch::new(),
             blocks,
-            u_pad: z(1),
-            v_pad: z(0),
-            s: z(4),
-            cv: vec![[0.0; 4]; lp_max / 4],
-            a: z(0),
-            pd: z(0),
-            pg: z(0),
+            cv: vec![[0.0; 4]; panels_max],
+            s: vec![0.0; 4 * panels_max + 4],
+            pd: vec![[0.0; 4]; panels_max],
+            pg: vec![[0.0; 4]; panels_max],
         }
     }
 
@@ -253,66 +256,89 @@ impl Rhs {
         o: &mut [f64],
     ) {
         let n = sys.n;
-        let (u, rest) = y.split_at(n);
-        let v = &rest[..n];
-        let (ou, orest) = o.split_at_mut(n);
-        ou.copy_from_slice(v);
-        let (acc, extra) = orest.split_at_mut(n);
+        assert!(y.len() >= 2 * n + 3 && o.len() >= 2 * n + 3);
+        o[..n].copy_from_slice(&y[n..2 * n]);
+        // The accelerations and the rates after them (see the type's docs on the rows
+        // written past a building's top).
+        let acc = &mut o[n..];
         let (mut pdamp, mut pin) = (0.0, 0.0);
         for (bi, b) in self.blocks.iter().enumerate() {
-            let (off, len, lp) = (b.off, b.len, b.lp);
-            let u_pad = &mut self.u_pad[..lp + 1];
-            let v_pad = &mut self.v_pad[..lp];
-            u_pad[0] = 0.0;
-            u_pad[1..=len].copy_from_slice(&u[off..off + len]);
-            v_pad[..len].copy_from_slice(&v[off..off + len]);
-            // Story forces s_j on the drifts u_j − u_{j−1} (u_{−1} = 0: the ground). Rows
-            // past `len` hold whatever the buffers hold: they are computed and never read.
-            let s = &mut self.s[..lp + 1];
-            if stories.yielding(bi) {
-                for j in 0..len {
-                    s[j] = stories.story_force(bi, j, u_pad[j + 1] - u_pad[j]).0;
-                }
-            } else {
-                let k = &b.k[..lp];
-                for j in 0..lp {
-                    s[j] = k[j] * (u_pad[j + 1] - u_pad[j]);
-                }
-            }
-            s[len] = -0.0;
+            let (off, len) = (b.off, b.len);
+            let panels = b.k.len();
+            let top = len - 1 - 4 * (panels - 1);
             // C v, panel group by panel group.
-            let cv = &mut self.cv[..lp / 4];
+            let cv = &mut self.cv[..panels];
+            let v = &y[n + off..n + off + len];
             let mut p0 = 0;
             for (g, data) in &b.groups {
                 let out = &mut cv[p0..p0 + g];
                 match g {
-                    4 => cv_group::<4>(data, &v_pad[..len], out),
-                    3 => cv_group::<3>(data, &v_pad[..len], out),
-                    2 => cv_group::<2>(data, &v_pad[..len], out),
-                    _ => cv_group::<1>(data, &v_pad[..len], out),
+                    4 => cv_group::<4>(data, v, out),
+                    3 => cv_group::<3>(data, v, out),
+                    2 => cv_group::<2>(data, v, out),
+                    _ => cv_group::<1>(data, v, out),
                 }
                 p0 += g;
             }
-            let cv = cv.as_flattened();
-            let (a, pd, pg, m) = (
-                &mut self.a[..lp],
-                &mut self.pd[..lp],
-                &mut self.pg[..lp],
-                &b.m[..lp],
-            );
-            let (s0, s1) = (&s[..lp], &s[1..lp + 1]);
-            for i in 0..lp {
-                let f = m[i] * ag;
-                a[i] = ((-s0[i] + s1[i]) - cv[i]) - f;
-                pd[i] = v_pad[i] * cv[i];
-                pg[i] = f * v_pad[i];
+            let yielding = stories.yielding(bi);
+            if yielding {
+                let s = &mut self.s;
+                let mut below = 0.0;
+                for j in 0..len {
+                    s[j] = stories.story_force(bi, j, y[off + j] - below).0;
+                    below = y[off + j];
+                }
+                s[len] = -0.0;
             }
-            for i in 0..len {
-                pdamp += pd[i];
-                pin -= pg[i];
+            let (pd, pg) = (&mut self.pd[..panels], &mut self.pg[..panels]);
+            for p in 0..panels {
+                let i = off + 4 * p;
+                // Story forces of the panel's rows (s0) and of the rows above (s1).
+                let (s0, mut s1) = if yielding {
+                    (quad(&self.s, 4 * p), quad(&self.s, 4 * p + 1))
+                } else {
+                    let uc = quad(y, i);
+                    let up = if p == 0 {
+                        [0.0, uc[0], uc[1], uc[2]]
+                    } else {
+                        quad(y, i - 1)
+                    };
+                    // The last panel's fourth row above is never used (it is the top floor
+                    // or past it): no read beyond the panel.
+                    let un = if p + 1 < panels {
+                        quad(y, i + 1)
+                    } else {
+                        [uc[1], uc[2], uc[3], 0.0]
+                    };
+                    let (k, kn) = (b.k[p], b.k_next[p]);
+                    (
+                        std::array::from_fn(|r| k[r] * (uc[r] - up[r])),
+                        std::array::from_fn(|r| kn[r] * (un[r] - uc[r])),
+                    )
+                };
+                if p + 1 == panels {
+                    s1[top] = -0.0;
+                }
+                let (m, c, vq) = (b.m[p], cv[p], quad(y, n + i));
+                let mut a = [0.0; 4];
+                for r in 0..4 {
+                    let f = m[r] * ag;
+                    a[r] = ((-s0[r] + s1[r]) - c[r]) - f;
+                    pd[p][r] = vq[r] * c[r];
+                    pg[p][r] = f * vq[r];
+                }
+                acc[i..i + 4].copy_from_slice(&a);
             }
-            acc[off..off + len].copy_from_slice(&a[..len]);
+            for (&d, &g) in pd.as_flattened()[..len]
+                .iter()
+                .zip(&pg.as_flattened()[..len])
+            {
+                pdamp += d;
+                pin -= g;
+            }
         }
+        let (acc, extra) = acc.split_at_mut(n);
+        let (u, v) = (&y[..n], &y[n..2 * n]);
         let mut pc = 0.0;
         for (ci, c) in sys.contacts.iter().enumerate() {
             let m = modes[ci];
@@ -1125,6 +1151,10 @@ pub(crate) fn dense_overlaps(
 /// rate of the dense output, and the building's floors there update the peaks. The dense
 /// output is the error-controlled interpolant of the step, so the peaks carry the
 /// integration tolerance, as the solution does.
+///
+/// Most quantities have no interior extremum in a step: a first pass over the floors only
+/// compares the signs of the rates at both ends (the rates computed as below), and the
+/// quantities whose rate changes sign are then examined one by one, in the same order.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn dense_peaks(
     sys: &System,
@@ -1141,65 +1171,106 @@ pub(crate) fn dense_peaks(
     if !(len > 0.0) {
         return;
     }
+    let (v0, v1) = (&y[n..2 * n], &y1[n..2 * n]);
     for (bi, b) in sys.blocks.iter().enumerate() {
         let yielding = stories.yielding(bi);
+        let (v0, v1) = (&v0[b.off..b.off + b.len], &v1[b.off..b.off + b.len]);
+        let k = &sys.story_k[b.off..b.off + b.len];
+        // The story rate sc·(v_j − v_{j−1}) (sc: k_j, or 1 for a yielding building's drift);
+        // x − 0 = x exactly, so the first story's is sc·v_0.
+        let rate = |v: &[f64], j: usize| {
+            let sc = if yielding { 1.0 } else { k[j] };
+            if j > 0 {
+                sc * (v[j] - v[j - 1])
+            } else {
+                sc * v[j]
+            }
+        };
         for j in 0..b.len {
-            let i = b.off + j;
-            for story in [false, true] {
-                let below = if story && j > 0 { Some(i - 1) } else { None };
-                // A yielding story: its drift (the law's shear is monotone in the drift along
-                // a branch and the step crosses no kink, so the shear's extremes lie at the
-                // drift's); an interior extremum is located unless the bounds of the drift
-                // over the step ([`super::stories::drift_bounds`]) show that neither the
-                // drift nor the law's shear there can reach its running peak (a smaller drift
-                // may carry a larger shear once the story has yielded).
-                let sc = if story && !yielding {
-                    sys.story_k[i]
-                } else {
-                    1.0
-                };
-                let comb =
-                    |u: &[f64], off: usize| sc * (u[off + i] - below.map_or(0.0, |l| u[off + l]));
-                let (y0, yd0, ye, yde) = (comb(y, 0), comb(y, n), comb(y1, 0), comb(y1, n));
-                let Some((_, h)) = crate::response::hermite_extremum(y0, yd0, ye, yde, len) else {
-                    continue;
-                };
-                if story && yielding && th_end >= 1.0 {
-                    // The law's shear is monotone in the drift (tangent k₀ or b k₀ ≥ 0), so
-                    // over the step it lies between its values at the drift's bounds.
-                    if let Some((lo, hi)) = super::stories::drift_bounds(dp, i, below) {
-                        let (v_lo, v_hi) = (
-                            stories.story_force(bi, j, lo).0,
-                            stories.story_force(bi, j, hi).0,
-                        );
-                        if v_lo.abs().max(v_hi.abs()) < tracker.peak(bi, j).0
-                            && lo.abs().max(hi.abs()) < tracker.peak_drift(bi, j)
-                        {
-                            continue;
-                        }
-                    }
-                }
-                if !(story && yielding) {
-                    let (vmax, dmax) = tracker.peak(bi, j);
-                    let peak = if story { vmax } else { dmax };
-                    let slack = if th_end < 1.0 {
-                        f64::INFINITY
-                    } else {
-                        sc * (dp.quartic(i) - below.map_or(0.0, |l| dp.quartic(l))).abs() / 16.0
-                    };
-                    if h.abs() + slack < peak {
-                        continue;
-                    }
-                }
-                let rate = |th: f64| {
-                    sc * (dp.dense(n + i, th) - below.map_or(0.0, |l| dp.dense(n + l, th)))
-                };
-                let th = crate::response::bisect(rate, 0.0, th_end);
-                for m in b.off..b.off + b.len {
-                    scratch[m] = dp.dense(m, th);
-                }
-                sys.observe_peaks(stories, tracker, bi, &scratch[b.off..b.off + b.len]);
+            if v0[j] * v1[j] < 0.0 {
+                peak_between(
+                    sys, stories, dp, y, y1, th_end, tracker, scratch, bi, j, false,
+                );
+            }
+            if rate(v0, j) * rate(v1, j) < 0.0 {
+                peak_between(
+                    sys, stories, dp, y, y1, th_end, tracker, scratch, bi, j, true,
+                );
             }
         }
     }
+}
+
+/// [`dense_peaks`] for one quantity of building `bi`, floor `j`: its displacement, or its
+/// story's shear when `story`.
+#[allow(clippy::too_many_arguments)]
+#[inline(never)]
+fn peak_between(
+    sys: &System,
+    stories: &Stories,
+    dp: &Dopri5,
+    y: &[f64],
+    y1: &[f64],
+    th_end: f64,
+    tracker: &mut ResponseTracker,
+    scratch: &mut [f64],
+    bi: usize,
+    j: usize,
+    story: bool,
+) {
+    let n = sys.n;
+    let len = th_end * dp.h;
+    let b = &sys.blocks[bi];
+    let yielding = stories.yielding(bi);
+    let i = b.off + j;
+    let below = if story && j > 0 { Some(i - 1) } else { None };
+    // A yielding story: its drift (the law's shear is monotone in the drift along
+    // a branch and the step crosses no kink, so the shear's extremes lie at the
+    // drift's); an interior extremum is located unless the bounds of the drift
+    // over the step ([`super::stories::drift_bounds`]) show that neither the
+    // drift nor the law's shear there can reach its running peak (a smaller drift
+    // may carry a larger shear once the story has yielded).
+    let sc = if story && !yielding {
+        sys.story_k[i]
+    } else {
+        1.0
+    };
+    let comb = |u: &[f64], off: usize| sc * (u[off + i] - below.map_or(0.0, |l| u[off + l]));
+    let (y0, yd0, ye, yde) = (comb(y, 0), comb(y, n), comb(y1, 0), comb(y1, n));
+    let Some((_, h)) = crate::response::hermite_extremum(y0, yd0, ye, yde, len) else {
+        return;
+    };
+    if story && yielding && th_end >= 1.0 {
+        // The law's shear is monotone in the drift (tangent k₀ or b k₀ ≥ 0), so
+        // over the step it lies between its values at the drift's bounds.
+        if let Some((lo, hi)) = super::stories::drift_bounds(dp, i, below) {
+            let (v_lo, v_hi) = (
+                stories.story_force(bi, j, lo).0,
+                stories.story_force(bi, j, hi).0,
+            );
+            if v_lo.abs().max(v_hi.abs()) < tracker.peak(bi, j).0
+                && lo.abs().max(hi.abs()) < tracker.peak_drift(bi, j)
+            {
+                return;
+            }
+        }
+    }
+    if !(story && yielding) {
+        let (vmax, dmax) = tracker.peak(bi, j);
+        let peak = if story { vmax } else { dmax };
+        let slack = if th_end < 1.0 {
+            f64::INFINITY
+        } else {
+            sc * (dp.quartic(i) - below.map_or(0.0, |l| dp.quartic(l))).abs() / 16.0
+        };
+        if h.abs() + slack < peak {
+            return;
+        }
+    }
+    let rate = |th: f64| sc * (dp.dense(n + i, th) - below.map_or(0.0, |l| dp.dense(n + l, th)));
+    let th = crate::response::bisect(rate, 0.0, th_end);
+    for m in b.off..b.off + b.len {
+        scratch[m] = dp.dense(m, th);
+    }
+    sys.observe_peaks(stories, tracker, bi, &scratch[b.off..b.off + b.len]);
 }
