@@ -95,10 +95,8 @@ struct PanelBlock {
     /// First floor (global index) and number of floors.
     off: usize,
     len: usize,
-    /// Per panel: story stiffness k_j of the panel's rows, of the rows above (k_{j+1}) and
-    /// floor mass m_j (zero past the top).
+    /// Per panel: story stiffness k_j and floor mass m_j of its rows (zero past the top).
     k: Vec<[f64; 4]>,
-    k_next: Vec<[f64; 4]>,
     m: Vec<[f64; 4]>,
     /// The damping matrix in groups of up to [`GROUP`] panels: (panels in the group, data
     /// laid out [column j][panel][row r]) holding `Block::c[j·len + 4p + r]`, the entry the
@@ -109,12 +107,6 @@ struct PanelBlock {
 
 /// Panels of 4 rows whose C v columns are summed together (4 accumulators: 16 rows).
 const GROUP: usize = 4;
-
-/// Four consecutive entries of `x` from `i`.
-#[inline(always)]
-fn quad(x: &[f64], i: usize) -> [f64; 4] {
-    x[i..i + 4].try_into().unwrap()
-}
 
 /// The adaptive integrator's right-hand side, laid out for vector instructions:
 ///
@@ -143,12 +135,8 @@ fn quad(x: &[f64], i: usize) -> [f64; 4] {
 pub(crate) struct Rhs {
     arch: pulp::Arch,
     blocks: Vec<PanelBlock>,
-    /// Work buffers: C v of a building's panels; its story forces s_j with s_len = −0
-    /// (yielding buildings only); the products v_i (C v)_i and m_i a_g v_i of its floors.
-    cv: Vec<[f64; 4]>,
+    /// Story forces of a yielding building, s_len = −0 (4 rows of padding).
     s: Vec<f64>,
-    pd: Vec<[f64; 4]>,
-    pg: Vec<[f64; 4]>,
 }
 
 impl Rhs {
@@ -159,12 +147,20 @@ impl Rhs {
             let (off, len) = (b.off, b.len);
             let panels = len.div_ceil(4);
             panels_max = panels_max.max(panels);
-            let quads = |x: &dyn Fn(usize) -> f64| -> Vec<[f64; 4]> {
+            let quads = |x: &[f64]| -> Vec<[f64; 4]> {
                 (0..panels)
-                    .map(|p| std::array::from_fn(|r| x(4 * p + r)))
+                    .map(|p| {
+                        std::array::from_fn(|r| {
+                            let j = 4 * p + r;
+                            if j < len {
+                                x[off + j]
+                            } else {
+                                0.0
+                            }
+                        })
+                    })
                     .collect()
             };
-            let row = |x: &[f64], j: usize| if j < len { x[off + j] } else { 0.0 };
             let mut groups = Vec::new();
             let mut p0 = 0;
             while p0 < panels {
@@ -188,19 +184,15 @@ impl Rhs {
             blocks.push(PanelBlock {
                 off,
                 len,
-                k: quads(&|j| row(&sys.story_k, j)),
-                k_next: quads(&|j| row(&sys.story_k, j + 1)),
-                m: quads(&|j| row(&sys.mass, j)),
+                k: quads(&sys.story_k),
+                m: quads(&sys.mass),
                 groups,
             });
         }
         Rhs {
             arch: pulp::Arch::new(),
             blocks,
-            cv: vec![[0.0; 4]; panels_max],
             s: vec![0.0; 4 * panels_max + 4],
-            pd: vec![[0.0; 4]; panels_max],
-            pg: vec![[0.0; 4]; panels_max],
         }
     }
 
@@ -257,32 +249,31 @@ impl Rhs {
     ) {
         let n = sys.n;
         assert!(y.len() >= 2 * n + 3 && o.len() >= 2 * n + 3);
-        o[..n].copy_from_slice(&y[n..2 * n]);
-        // The accelerations and the rates after them (see the type's docs on the rows
-        // written past a building's top).
-        let acc = &mut o[n..];
-        let (mut pdamp, mut pin) = (0.0, 0.0);
+        // u̇ = v, 4 rows at a time: the rows past n land on the first accelerations, written
+        // below.
+        let rows = 4 * n.div_ceil(4);
+        let (vq, _) = y[n..n + rows].as_chunks::<4>();
+        let (oq, _) = o[..rows].as_chunks_mut::<4>();
+        for (o, v) in oq.iter_mut().zip(vq) {
+            *o = *v;
+        }
+        let mut sums = Sums {
+            pdamp: 0.0,
+            pin: 0.0,
+        };
         for (bi, b) in self.blocks.iter().enumerate() {
             let (off, len) = (b.off, b.len);
             let panels = b.k.len();
+            let rows = 4 * panels;
+            let (u, _) = y[off..off + rows].as_chunks::<4>();
+            let (v, _) = y[n + off..n + off + rows].as_chunks::<4>();
+            let (out, _) = o[n + off..n + off + rows].as_chunks_mut::<4>();
+            let vcol = &y[n + off..n + off + len];
+            // The rows of the last panel: 1 to 4 (its row `top` is the top floor).
             let top = len - 1 - 4 * (panels - 1);
-            // C v, panel group by panel group.
-            let cv = &mut self.cv[..panels];
-            let v = &y[n + off..n + off + len];
-            let mut p0 = 0;
-            for (g, data) in &b.groups {
-                let out = &mut cv[p0..p0 + g];
-                match g {
-                    4 => cv_group::<4>(data, v, out),
-                    3 => cv_group::<3>(data, v, out),
-                    2 => cv_group::<2>(data, v, out),
-                    _ => cv_group::<1>(data, v, out),
-                }
-                p0 += g;
-            }
             let yielding = stories.yielding(bi);
+            let s = &mut self.s[..rows + 4];
             if yielding {
-                let s = &mut self.s;
                 let mut below = 0.0;
                 for j in 0..len {
                     s[j] = stories.story_force(bi, j, y[off + j] - below).0;
@@ -290,54 +281,47 @@ impl Rhs {
                 }
                 s[len] = -0.0;
             }
-            let (pd, pg) = (&mut self.pd[..panels], &mut self.pg[..panels]);
-            for p in 0..panels {
-                let i = off + 4 * p;
-                // Story forces of the panel's rows (s0) and of the rows above (s1).
-                let (s0, mut s1) = if yielding {
-                    (quad(&self.s, 4 * p), quad(&self.s, 4 * p + 1))
-                } else {
-                    let uc = quad(y, i);
-                    let up = if p == 0 {
-                        [0.0, uc[0], uc[1], uc[2]]
+            let (sy0, _) = s[..rows].as_chunks::<4>();
+            let (sy1, _) = s[1..rows + 1].as_chunks::<4>();
+            // Linear stories: forces panel by panel, the next panel's computed one ahead
+            // (the rows above a panel's are its own shifted by one plus the next panel's
+            // first).
+            let mut s_cur = if yielding {
+                [0.0; 4]
+            } else {
+                story_forces(u[0], b.k[0], 0.0)
+            };
+            let mut p0 = 0;
+            for (g, data) in &b.groups {
+                let cv = cv_group(*g, data, vcol);
+                for (q, &c) in cv[..*g].iter().enumerate() {
+                    let p = p0 + q;
+                    let (s0, s1) = if yielding {
+                        (sy0[p], sy1[p])
                     } else {
-                        quad(y, i - 1)
+                        let s_next = if p + 1 < panels {
+                            story_forces(u[p + 1], b.k[p + 1], u[p][3])
+                        } else {
+                            [-0.0; 4]
+                        };
+                        let s0 = s_cur;
+                        s_cur = s_next;
+                        (s0, [s0[1], s0[2], s0[3], s_next[0]])
                     };
-                    // The last panel's fourth row above is never used (it is the top floor
-                    // or past it): no read beyond the panel.
-                    let un = if p + 1 < panels {
-                        quad(y, i + 1)
+                    let panel = if p + 1 == panels {
+                        Panel {
+                            rows: top + 1,
+                            top: Some(top),
+                        }
                     } else {
-                        [uc[1], uc[2], uc[3], 0.0]
+                        Panel { rows: 4, top: None }
                     };
-                    let (k, kn) = (b.k[p], b.k_next[p]);
-                    (
-                        std::array::from_fn(|r| k[r] * (uc[r] - up[r])),
-                        std::array::from_fn(|r| kn[r] * (un[r] - uc[r])),
-                    )
-                };
-                if p + 1 == panels {
-                    s1[top] = -0.0;
+                    panel.finish(c, s0, s1, b.m[p], v[p], ag, &mut out[p], &mut sums);
                 }
-                let (m, c, vq) = (b.m[p], cv[p], quad(y, n + i));
-                let mut a = [0.0; 4];
-                for r in 0..4 {
-                    let f = m[r] * ag;
-                    a[r] = ((-s0[r] + s1[r]) - c[r]) - f;
-                    pd[p][r] = vq[r] * c[r];
-                    pg[p][r] = f * vq[r];
-                }
-                acc[i..i + 4].copy_from_slice(&a);
-            }
-            for (&d, &g) in pd.as_flattened()[..len]
-                .iter()
-                .zip(&pg.as_flattened()[..len])
-            {
-                pdamp += d;
-                pin -= g;
+                p0 += g;
             }
         }
-        let (acc, extra) = acc.split_at_mut(n);
+        let (acc, extra) = o[n..].split_at_mut(n);
         let (u, v) = (&y[..n], &y[n..2 * n]);
         let mut pc = 0.0;
         for (ci, c) in sys.contacts.iter().enumerate() {
@@ -357,25 +341,96 @@ impl Rhs {
         for i in 0..n {
             acc[i] *= inv_mass[i];
         }
-        extra[0] = pin;
-        extra[1] = pdamp;
+        extra[0] = sums.pin;
+        extra[1] = sums.pdamp;
         extra[2] = pc;
     }
 }
 
-/// (C v) of the `G` panels of one group ([`PanelBlock::groups`]): each row's sum over the
-/// columns in order from 0, starting from 0 (the sums of `System::internal`).
+/// The running energy rates of [`Rhs`]: vᵀ C v and −Σ m_i a_g v_i, summed floor by floor.
+struct Sums {
+    pdamp: f64,
+    pin: f64,
+}
+
+/// Which rows of a panel are floors.
+#[derive(Clone, Copy)]
+struct Panel {
+    /// Rows that are floors (from the first).
+    rows: usize,
+    /// The top floor's row, in the building's last panel: the row above it is the roof
+    /// (s_len = −0).
+    top: Option<usize>,
+}
+
+impl Panel {
+    /// The accelerations before M⁻¹ of one panel into `out`, from its C v `c`, its story
+    /// forces `s0` and those of the rows above `s1`, its floor masses `m` and velocities
+    /// `v`; adds its floors' energy rates in row order.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn finish(
+        self,
+        c: [f64; 4],
+        s0: [f64; 4],
+        s1: [f64; 4],
+        m: [f64; 4],
+        v: [f64; 4],
+        ag: f64,
+        out: &mut [f64; 4],
+        sums: &mut Sums,
+    ) {
+        let s1: [f64; 4] = match self.top {
+            Some(top) => std::array::from_fn(|r| if r == top { -0.0 } else { s1[r] }),
+            None => s1,
+        };
+        let f: [f64; 4] = std::array::from_fn(|r| m[r] * ag);
+        *out = std::array::from_fn(|r| ((-s0[r] + s1[r]) - c[r]) - f[r]);
+        let pd: [f64; 4] = std::array::from_fn(|r| v[r] * c[r]);
+        let pg: [f64; 4] = std::array::from_fn(|r| f[r] * v[r]);
+        for r in 0..self.rows {
+            sums.pdamp += pd[r];
+            sums.pin -= pg[r];
+        }
+    }
+}
+
+/// Story forces k_r (u_r − u_{r−1}) of a panel's rows from their displacements `u`, stiffness
+/// `k` and the displacement `below` of the floor under the panel's first row.
 #[inline(always)]
-fn cv_group<const G: usize>(data: &[[f64; 4]], v: &[f64], out: &mut [[f64; 4]]) {
+fn story_forces(u: [f64; 4], k: [f64; 4], below: f64) -> [f64; 4] {
+    let up = [below, u[0], u[1], u[2]];
+    std::array::from_fn(|r| k[r] * (u[r] - up[r]))
+}
+
+/// (C v) of the `g` panels of one group ([`PanelBlock::groups`]) from the velocities `v` of
+/// the building's floors: each row's sum over the columns in order from 0, starting from 0
+/// (the sums of `System::internal`).
+#[inline(always)]
+fn cv_group(g: usize, data: &[[f64; 4]], v: &[f64]) -> [[f64; 4]; GROUP] {
+    let mut out = [[0.0; 4]; GROUP];
+    match g {
+        4 => out = cv_panels::<4>(data, v),
+        3 => out[..3].copy_from_slice(&cv_panels::<3>(data, v)),
+        2 => out[..2].copy_from_slice(&cv_panels::<2>(data, v)),
+        _ => out[..1].copy_from_slice(&cv_panels::<1>(data, v)),
+    }
+    out
+}
+
+/// [`cv_group`] for `G` panels.
+#[inline(always)]
+fn cv_panels<const G: usize>(data: &[[f64; 4]], v: &[f64]) -> [[f64; 4]; G] {
     let mut acc = [[0.0f64; 4]; G];
-    for (c, &vj) in data.chunks_exact(G).zip(v) {
+    let (data, _) = data.as_chunks::<G>();
+    for (c, &vj) in data.iter().zip(v) {
         for g in 0..G {
             for r in 0..4 {
                 acc[g][r] += c[g][r] * vj;
             }
         }
     }
-    out[..G].copy_from_slice(&acc);
+    acc
 }
 
 /// Observes the state `y` for peaks and, when a history is kept, for its next sample (with
