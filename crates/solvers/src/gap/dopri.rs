@@ -338,6 +338,12 @@ impl Dopri5 {
         r[0][i] + theta * (r[1][i] + t1 * (r[2][i] + theta * (r[3][i] + t1 * r[4][i])))
     }
 
+    /// The dense-output coefficients (r₁ … r₅) of component `i`, for [`dense_at`].
+    #[inline]
+    pub fn coefficients(&self, i: usize) -> [f64; 5] {
+        std::array::from_fn(|k| self.rcont[k][i])
+    }
+
     /// The coefficient r₅ of component `i`: the dense output is the cubic Hermite
     /// interpolant of the step's end values and slopes plus r₅ θ²(1−θ)².
     #[inline]
@@ -390,6 +396,14 @@ impl Dopri5 {
         let [k1, .., k7] = &mut self.k;
         k1.copy_from_slice(k7);
     }
+}
+
+/// [`Dopri5::dense`] from a component's coefficients ([`Dopri5::coefficients`]): the same
+/// arithmetic, so the same value.
+#[inline(always)]
+pub fn dense_at(r: &[f64; 5], theta: f64) -> f64 {
+    let t1 = 1.0 - theta;
+    r[0] + theta * (r[1] + t1 * (r[2] + theta * (r[3] + t1 * r[4])))
 }
 
 #[cfg(test)]
