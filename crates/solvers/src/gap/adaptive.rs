@@ -1193,6 +1193,13 @@ pub(crate) fn bisect(f: impl Fn(f64) -> f64, lo: f64, hi: f64) -> f64 {
     0.5 * (lo + hi)
 }
 
+/// `if c { a } else { b }` by bit masks, which compiles without a branch.
+#[inline(always)]
+fn select(c: bool, a: f64, b: f64) -> f64 {
+    let m = u64::from(c).wrapping_neg();
+    f64::from_bits((a.to_bits() & m) | (b.to_bits() & !m))
+}
+
 /// The overlap audit over an accepted step (issue 11, [`crate::overlap`]): u_left − u_right
 /// of every audited pair at the end of the part taken (θ = `th_end`, state `y1`) and, when
 /// its rate turns from + to − over the step, at the interior maximum, located as in
@@ -1224,11 +1231,13 @@ pub(crate) fn dense_overlaps(
             y1[l] - y1[r],
             y1[n + l] - y1[n + r],
         );
-        ov.offer(k, t + len, ye);
+        // `OverlapTracker::offer` without a branch (a new maximum comes unpredictably).
+        let higher = ye > ov.max[k];
+        ov.max[k] = select(higher, ye, ov.max[k]);
+        ov.time[k] = select(higher, t + len, ov.time[k]);
         // A maximum inside: the rate turns from + to − (`hermite_extremum` asks for the
-        // sign change too).
-        let turns = yd0 * yde < 0.0;
-        if yd0 <= 0.0 || !turns {
+        // sign change too); rarely.
+        if !((yd0 > 0.0) & (yd0 * yde < 0.0)) {
             continue;
         }
         let Some((_, h)) = crate::response::hermite_extremum(y0, yd0, ye, yde, len) else {
@@ -1344,31 +1353,44 @@ fn peak_between(
     };
     let comb = |u: &[f64], off: usize| sc * (u[off + i] - below.map_or(0.0, |l| u[off + l]));
     let (y0, yd0, ye, yde) = (comb(y, 0), comb(y, n), comb(y1, 0), comb(y1, n));
-    let Some((_, h)) = crate::response::hermite_extremum(y0, yd0, ye, yde, len) else {
-        return;
-    };
-    if story && yielding && th_end >= 1.0 {
-        // The law's shear is monotone in the drift (tangent k₀ or b k₀ ≥ 0), so
-        // over the step it lies between its values at the drift's bounds.
-        if let Some((lo, hi)) = super::stories::drift_bounds(dp, i, below) {
-            let (v_lo, v_hi) = (
-                stories.story_force(bi, j, lo).0,
-                stories.story_force(bi, j, hi).0,
-            );
-            if v_lo.abs().max(v_hi.abs()) < tracker.peak(bi, j).0
-                && lo.abs().max(hi.abs()) < tracker.peak_drift(bi, j)
-            {
-                return;
+    // The caller saw yd0·yde < 0 (and len > 0): there is a Hermite extremum H.
+    if story && yielding {
+        if th_end >= 1.0 {
+            // The law's shear is monotone in the drift (tangent k₀ or b k₀ ≥ 0), so
+            // over the step it lies between its values at the drift's bounds.
+            if let Some((lo, hi)) = super::stories::drift_bounds(dp, i, below) {
+                let (v_lo, v_hi) = (
+                    stories.story_force(bi, j, lo).0,
+                    stories.story_force(bi, j, hi).0,
+                );
+                if v_lo.abs().max(v_hi.abs()) < tracker.peak(bi, j).0
+                    && lo.abs().max(hi.abs()) < tracker.peak_drift(bi, j)
+                {
+                    return;
+                }
             }
         }
-    }
-    if !(story && yielding) {
+    } else {
         let (vmax, dmax) = tracker.peak(bi, j);
         let peak = if story { vmax } else { dmax };
         let slack = if th_end < 1.0 {
             f64::INFINITY
         } else {
             sc * (dp.quartic(i) - below.map_or(0.0, |l| dp.quartic(l))).abs() / 16.0
+        };
+        // First a bound of |H| without solving for the extremum: H = h₀₀ y0 + h₀₁ ye +
+        // h₁₀ m0 + h₁₁ me with h₀₀, h₀₁ ≥ 0 summing to 1 and |h₁₀|, |h₁₁| ≤ 4/27 on
+        // [0, 1] (m = rate·len), so |H| ≤ max(|y0|, |ye|) + 4/27 (|m0| + |me|); 1e-12 of
+        // the sum of the magnitudes covers the round-off of `hermite_extremum`'s value
+        // many times over. Below the peak, that value would be too: the same decision.
+        let (m0, me) = (yd0 * len, yde * len);
+        let size = y0.abs() + ye.abs() + m0.abs() + me.abs();
+        let bound = y0.abs().max(ye.abs()) + 4.0 / 27.0 * (m0.abs() + me.abs()) + 1e-12 * size;
+        if bound + slack < peak {
+            return;
+        }
+        let Some((_, h)) = crate::response::hermite_extremum(y0, yd0, ye, yde, len) else {
+            return;
         };
         if h.abs() + slack < peak {
             return;
