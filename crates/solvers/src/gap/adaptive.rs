@@ -137,6 +137,9 @@ pub(crate) struct Rhs {
     blocks: Vec<PanelBlock>,
     /// Story forces of a yielding building, s_len = −0 (4 rows of padding).
     s: Vec<f64>,
+    /// A building's energy-rate products v_i (C v)_i and m_i a_g v_i, per panel.
+    pd: Vec<[f64; 4]>,
+    pg: Vec<[f64; 4]>,
 }
 
 impl Rhs {
@@ -193,6 +196,8 @@ impl Rhs {
             arch: pulp::Arch::new(),
             blocks,
             s: vec![0.0; 4 * panels_max + 4],
+            pd: vec![[0.0; 4]; panels_max],
+            pg: vec![[0.0; 4]; panels_max],
         }
     }
 
@@ -257,10 +262,7 @@ impl Rhs {
         for (o, v) in oq.iter_mut().zip(vq) {
             *o = *v;
         }
-        let mut sums = Sums {
-            pdamp: 0.0,
-            pin: 0.0,
-        };
+        let (mut pdamp, mut pin) = (0.0, 0.0);
         for (bi, b) in self.blocks.iter().enumerate() {
             let (off, len) = (b.off, b.len);
             let panels = b.k.len();
@@ -281,44 +283,35 @@ impl Rhs {
                 }
                 s[len] = -0.0;
             }
-            let (sy0, _) = s[..rows].as_chunks::<4>();
-            let (sy1, _) = s[1..rows + 1].as_chunks::<4>();
-            // Linear stories: forces panel by panel, the next panel's computed one ahead
-            // (the rows above a panel's are its own shifted by one plus the next panel's
-            // first).
-            let mut s_cur = if yielding {
-                [0.0; 4]
-            } else {
-                story_forces(u[0], b.k[0], 0.0)
-            };
+            let s: Option<&[f64]> = yielding.then_some(s);
             let mut p0 = 0;
             for (g, data) in &b.groups {
-                let cv = cv_group(*g, data, vcol);
-                for (q, &c) in cv[..*g].iter().enumerate() {
-                    let p = p0 + q;
-                    let (s0, s1) = if yielding {
-                        (sy0[p], sy1[p])
-                    } else {
-                        let s_next = if p + 1 < panels {
-                            story_forces(u[p + 1], b.k[p + 1], u[p][3])
-                        } else {
-                            [-0.0; 4]
-                        };
-                        let s0 = s_cur;
-                        s_cur = s_next;
-                        (s0, [s0[1], s0[2], s0[3], s_next[0]])
-                    };
-                    let panel = if p + 1 == panels {
-                        Panel {
-                            rows: top + 1,
-                            top: Some(top),
-                        }
-                    } else {
-                        Panel { rows: 4, top: None }
-                    };
-                    panel.finish(c, s0, s1, b.m[p], v[p], ag, &mut out[p], &mut sums);
+                let io = GroupIo {
+                    p0,
+                    top: (p0 + g == panels).then_some(top),
+                    u,
+                    v,
+                    vcol,
+                    k: &b.k,
+                    m: &b.m,
+                    s,
+                    ag,
+                };
+                let (out, pd, pg) = (&mut out[..], &mut self.pd[..], &mut self.pg[..]);
+                match g {
+                    4 => group::<4>(data, &io, out, pd, pg),
+                    3 => group::<3>(data, &io, out, pd, pg),
+                    2 => group::<2>(data, &io, out, pd, pg),
+                    _ => group::<1>(data, &io, out, pd, pg),
                 }
                 p0 += g;
+            }
+            // The energy rates floor by floor (the scalar order of `System::internal`).
+            let (pd, _) = self.pd.as_flattened().split_at(len);
+            let (pg, _) = self.pg.as_flattened().split_at(len);
+            for (&d, &g) in pd.iter().zip(pg) {
+                pdamp += d;
+                pin -= g;
             }
         }
         let (acc, extra) = o[n..].split_at_mut(n);
@@ -341,58 +334,33 @@ impl Rhs {
         for i in 0..n {
             acc[i] *= inv_mass[i];
         }
-        extra[0] = sums.pin;
-        extra[1] = sums.pdamp;
+        extra[0] = pin;
+        extra[1] = pdamp;
         extra[2] = pc;
     }
 }
 
-/// The running energy rates of [`Rhs`]: vᵀ C v and −Σ m_i a_g v_i, summed floor by floor.
-struct Sums {
-    pdamp: f64,
-    pin: f64,
-}
-
-/// Which rows of a panel are floors.
-#[derive(Clone, Copy)]
-struct Panel {
-    /// Rows that are floors (from the first).
-    rows: usize,
-    /// The top floor's row, in the building's last panel: the row above it is the roof
-    /// (s_len = −0).
-    top: Option<usize>,
-}
-
-impl Panel {
-    /// The accelerations before M⁻¹ of one panel into `out`, from its C v `c`, its story
-    /// forces `s0` and those of the rows above `s1`, its floor masses `m` and velocities
-    /// `v`; adds its floors' energy rates in row order.
-    #[allow(clippy::too_many_arguments)]
-    #[inline(always)]
-    fn finish(
-        self,
-        c: [f64; 4],
-        s0: [f64; 4],
-        s1: [f64; 4],
-        m: [f64; 4],
-        v: [f64; 4],
-        ag: f64,
-        out: &mut [f64; 4],
-        sums: &mut Sums,
-    ) {
-        let s1: [f64; 4] = match self.top {
-            Some(top) => std::array::from_fn(|r| if r == top { -0.0 } else { s1[r] }),
-            None => s1,
-        };
-        let f: [f64; 4] = std::array::from_fn(|r| m[r] * ag);
-        *out = std::array::from_fn(|r| ((-s0[r] + s1[r]) - c[r]) - f[r]);
-        let pd: [f64; 4] = std::array::from_fn(|r| v[r] * c[r]);
-        let pg: [f64; 4] = std::array::from_fn(|r| f[r] * v[r]);
-        for r in 0..self.rows {
-            sums.pdamp += pd[r];
-            sums.pin -= pg[r];
-        }
-    }
+/// The accelerations before M⁻¹ of one panel into `out`, from its C v `c`, its story forces
+/// `s0` and those of the rows above `s1` (−0 above the top floor), its floor masses `m` and
+/// velocities `v`; and its floors' energy rates v_i (C v)_i into `pd` and m_i a_g v_i into
+/// `pg`.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn panel(
+    c: [f64; 4],
+    s0: [f64; 4],
+    s1: [f64; 4],
+    m: [f64; 4],
+    v: [f64; 4],
+    ag: f64,
+    out: &mut [f64; 4],
+    pd: &mut [f64; 4],
+    pg: &mut [f64; 4],
+) {
+    let f: [f64; 4] = std::array::from_fn(|r| m[r] * ag);
+    *out = std::array::from_fn(|r| ((-s0[r] + s1[r]) - c[r]) - f[r]);
+    *pd = std::array::from_fn(|r| v[r] * c[r]);
+    *pg = std::array::from_fn(|r| f[r] * v[r]);
 }
 
 /// Story forces k_r (u_r − u_{r−1}) of a panel's rows from their displacements `u`, stiffness
@@ -403,22 +371,99 @@ fn story_forces(u: [f64; 4], k: [f64; 4], below: f64) -> [f64; 4] {
     std::array::from_fn(|r| k[r] * (u[r] - up[r]))
 }
 
-/// (C v) of the `g` panels of one group ([`PanelBlock::groups`]) from the velocities `v` of
-/// the building's floors: each row's sum over the columns in order from 0, starting from 0
-/// (the sums of `System::internal`).
-#[inline(always)]
-fn cv_group(g: usize, data: &[[f64; 4]], v: &[f64]) -> [[f64; 4]; GROUP] {
-    let mut out = [[0.0; 4]; GROUP];
-    match g {
-        4 => out = cv_panels::<4>(data, v),
-        3 => out[..3].copy_from_slice(&cv_panels::<3>(data, v)),
-        2 => out[..2].copy_from_slice(&cv_panels::<2>(data, v)),
-        _ => out[..1].copy_from_slice(&cv_panels::<1>(data, v)),
-    }
-    out
+/// The inputs of one group of panels of a building ([`group`]).
+struct GroupIo<'a> {
+    /// The group's first panel.
+    p0: usize,
+    /// The row of the building's top floor in the group's last panel, if it holds it.
+    top: Option<usize>,
+    /// The building's displacements and velocities by panel (rows past the top are read,
+    /// never used) and its floors' velocities.
+    u: &'a [[f64; 4]],
+    v: &'a [[f64; 4]],
+    vcol: &'a [f64],
+    /// Story stiffness and floor masses by panel.
+    k: &'a [[f64; 4]],
+    m: &'a [[f64; 4]],
+    /// The story forces of a yielding building (s_len = −0, 4 rows of padding); `None` for
+    /// a linear one.
+    s: Option<&'a [f64]>,
+    ag: f64,
 }
 
-/// [`cv_group`] for `G` panels.
+/// One group of `G` panels ([`PanelBlock::groups`]): C v, the story forces and [`panel`],
+/// on arrays of fixed size (unrolled, no bounds checks inside).
+#[inline(always)]
+fn group<const G: usize>(
+    data: &[[f64; 4]],
+    io: &GroupIo,
+    out: &mut [[f64; 4]],
+    pd: &mut [[f64; 4]],
+    pg: &mut [[f64; 4]],
+) {
+    let (p0, panels) = (io.p0, io.u.len());
+    let c = cv_panels::<G>(data, io.vcol);
+    let r = p0..p0 + G;
+    let u: &[[f64; 4]; G] = io.u[r.clone()].try_into().unwrap();
+    let v: &[[f64; 4]; G] = io.v[r.clone()].try_into().unwrap();
+    let m: &[[f64; 4]; G] = io.m[r.clone()].try_into().unwrap();
+    let out: &mut [[f64; 4]; G] = (&mut out[r.clone()]).try_into().unwrap();
+    let pd: &mut [[f64; 4]; G] = (&mut pd[r.clone()]).try_into().unwrap();
+    let pg: &mut [[f64; 4]; G] = (&mut pg[r.clone()]).try_into().unwrap();
+    // Story forces of the group's rows (s0) and of the rows above (s1).
+    let (s0, mut s1): ([[f64; 4]; G], [[f64; 4]; G]) = match io.s {
+        Some(s) => (
+            std::array::from_fn(|q| quad(s, 4 * (p0 + q))),
+            std::array::from_fn(|q| quad(s, 4 * (p0 + q) + 1)),
+        ),
+        None => {
+            let k: &[[f64; 4]; G] = io.k[r].try_into().unwrap();
+            let below = if p0 == 0 { 0.0 } else { io.u[p0 - 1][3] };
+            let s0: [[f64; 4]; G] = std::array::from_fn(|q| {
+                let under = if q == 0 { below } else { u[q - 1][3] };
+                story_forces(u[q], k[q], under)
+            });
+            // The story above the group: the next panel's first (the roof: −0).
+            let above = if p0 + G < panels {
+                let (un, kn) = (io.u[p0 + G][0], io.k[p0 + G][0]);
+                kn * (un - u[G - 1][3])
+            } else {
+                -0.0
+            };
+            let s1 = std::array::from_fn(|q| {
+                let next = if q + 1 < G { s0[q + 1][0] } else { above };
+                [s0[q][1], s0[q][2], s0[q][3], next]
+            });
+            (s0, s1)
+        }
+    };
+    if let Some(top) = io.top {
+        s1[G - 1][top] = -0.0;
+    }
+    for q in 0..G {
+        panel(
+            c[q],
+            s0[q],
+            s1[q],
+            m[q],
+            v[q],
+            io.ag,
+            &mut out[q],
+            &mut pd[q],
+            &mut pg[q],
+        );
+    }
+}
+
+/// Four consecutive entries of `x` from `i`.
+#[inline(always)]
+fn quad(x: &[f64], i: usize) -> [f64; 4] {
+    x[i..i + 4].try_into().unwrap()
+}
+
+/// (C v) of the `G` panels of one group ([`PanelBlock::groups`]) from the velocities `v` of
+/// the building's floors: each row's sum over the columns in order from 0, starting from 0
+/// (the sums of `System::internal`).
 #[inline(always)]
 fn cv_panels<const G: usize>(data: &[[f64; 4]], v: &[f64]) -> [[f64; 4]; G] {
     let mut acc = [[0.0f64; 4]; G];
