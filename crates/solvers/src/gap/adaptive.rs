@@ -438,7 +438,8 @@ fn group<const G: usize>(
         }
     };
     if let Some(top) = io.top {
-        s1[G - 1][top] = -0.0;
+        // A select rather than a store at a variable row (which would go through memory).
+        s1[G - 1] = std::array::from_fn(|r| if r == top { -0.0 } else { s1[G - 1][r] });
     }
     for q in 0..G {
         panel(
