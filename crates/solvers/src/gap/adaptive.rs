@@ -1338,27 +1338,25 @@ pub(crate) fn dense_peaks(
         let yielding = stories.yielding(bi);
         let (v0, v1) = (&v0[b.off..b.off + b.len], &v1[b.off..b.off + b.len]);
         let k = &sys.story_k[b.off..b.off + b.len];
-        // The story rate sc·(v_j − v_{j−1}) (sc: k_j, or 1 for a yielding building's drift);
-        // x − 0 = x exactly, so the first story's is sc·v_0.
-        let rate = |v: &[f64], j: usize| {
-            let sc = if yielding { 1.0 } else { k[j] };
-            if j > 0 {
-                sc * (v[j] - v[j - 1])
-            } else {
-                sc * v[j]
-            }
-        };
+        // Each floor's rate v_j and its story's rate sc·(v_j − v_{j−1}) (sc: k_j, or 1 for
+        // a yielding building's drift; v_{−1} = 0, and x − 0 = x exactly) at both ends; a
+        // sign change sends the quantity to `peak_between`, the floor's first.
+        let (mut below0, mut below1) = (0.0, 0.0);
         for j in 0..b.len {
-            if v0[j] * v1[j] < 0.0 {
-                peak_between(
-                    sys, stories, dp, y, y1, th_end, tracker, scratch, bi, j, false,
-                );
+            let (a0, a1) = (v0[j], v1[j]);
+            let sc = if yielding { 1.0 } else { k[j] };
+            let (r0, r1) = (sc * (a0 - below0), sc * (a1 - below1));
+            let (floor, story) = (a0 * a1 < 0.0, r0 * r1 < 0.0);
+            if floor | story {
+                for (turns, story) in [(floor, false), (story, true)] {
+                    if turns {
+                        peak_between(
+                            sys, stories, dp, y, y1, th_end, tracker, scratch, bi, j, story,
+                        );
+                    }
+                }
             }
-            if rate(v0, j) * rate(v1, j) < 0.0 {
-                peak_between(
-                    sys, stories, dp, y, y1, th_end, tracker, scratch, bi, j, true,
-                );
-            }
+            (below0, below1) = (a0, a1);
         }
     }
 }
