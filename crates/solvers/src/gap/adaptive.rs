@@ -861,17 +861,18 @@ impl<'a> GapStepper<'a> {
         // The accepted part of the step, shown to the driver before the state moves on
         // (the step's start state is still in `y`).
         let th_end = th_cut.map_or(1.0, |th| th.min(1.0));
-        if th_end < 1.0 {
+        let y1: &[f64] = if th_end < 1.0 {
             dp.dense_all(th_end, y_end);
+            y_end
         } else {
-            y_end.copy_from_slice(&dp.y1);
-        }
+            &dp.y1
+        };
         on_dense(&DenseStep {
             dp,
             stories,
             t,
             y0: y,
-            y1: y_end,
+            y1,
             th_end,
         });
         let outcome;
@@ -921,7 +922,7 @@ impl<'a> GapStepper<'a> {
                     stats.rhs_evaluations += 1;
                 }
                 None => {
-                    self.dp.accept_full(y);
+                    self.dp.accept_swap(y);
                     t = if land { t_bp } else { t + hs };
                     stories.commit(&y[..n], &y[n..2 * n], None);
                     outcome = if land && t == t_bp {
@@ -1142,6 +1143,7 @@ pub(crate) fn run_from(
     let keep = history.is_some();
     let mut tracker = ResponseTracker::new(scene);
     let mut overlaps = crate::overlap::OverlapTracker::new(scene);
+    let dofs = overlap_dofs(sys, &overlaps);
     sys.observe_overlaps(&mut overlaps, 0.0, stepper.u());
     stepper.observe(&mut tracker, keep);
     tracker.sample(0.0, history.as_deref_mut());
@@ -1161,7 +1163,7 @@ pub(crate) fn run_from(
                 &mut scratch,
             );
             if !overlaps.is_empty() {
-                dense_overlaps(sys, s.dp, s.t, s.y0, s.y1, s.th_end, &mut overlaps);
+                overlaps_over(sys.n, &dofs, s.dp, s.t, s.y0, s.y1, s.th_end, &mut overlaps);
             }
         })?;
         match outcome {
@@ -1260,47 +1262,95 @@ pub(crate) fn dense_overlaps(
     th_end: f64,
     ov: &mut crate::overlap::OverlapTracker,
 ) {
-    let n = sys.n;
+    let dofs = overlap_dofs(sys, ov);
+    overlaps_over(sys.n, &dofs, dp, t, y, y1, th_end, ov);
+}
+
+/// The state components (u_left, u_right) of every audited pair of `ov`.
+pub(crate) fn overlap_dofs(
+    sys: &System,
+    ov: &crate::overlap::OverlapTracker,
+) -> Vec<(usize, usize)> {
+    ov.pairs
+        .iter()
+        .map(|p| {
+            (
+                sys.blocks[p.left].off + p.left_dof,
+                sys.blocks[p.right].off + p.right_dof,
+            )
+        })
+        .collect()
+}
+
+/// [`dense_overlaps`] with the pairs' state components ([`overlap_dofs`]) given.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn overlaps_over(
+    n: usize,
+    dofs: &[(usize, usize)],
+    dp: &Dopri5,
+    t: f64,
+    y: &[f64],
+    y1: &[f64],
+    th_end: f64,
+    ov: &mut crate::overlap::OverlapTracker,
+) {
     let len = th_end * dp.h;
     if len <= 0.0 {
         return;
     }
-    for k in 0..ov.pairs.len() {
-        let p = &ov.pairs[k];
-        let (l, r) = (
-            sys.blocks[p.left].off + p.left_dof,
-            sys.blocks[p.right].off + p.right_dof,
-        );
-        let (y0, yd0, ye, yde) = (
-            y[l] - y[r],
-            y[n + l] - y[n + r],
-            y1[l] - y1[r],
-            y1[n + l] - y1[n + r],
-        );
+    let (u0, v0, u1, v1) = (&y[..n], &y[n..2 * n], &y1[..n], &y1[n..2 * n]);
+    let (max, time) = (&mut ov.max[..dofs.len()], &mut ov.time[..dofs.len()]);
+    for (k, &(l, r)) in dofs.iter().enumerate() {
+        let (yd0, ye, yde) = (v0[l] - v0[r], u1[l] - u1[r], v1[l] - v1[r]);
         // `OverlapTracker::offer` without a branch (a new maximum comes unpredictably).
-        let higher = ye > ov.max[k];
-        ov.max[k] = select(higher, ye, ov.max[k]);
-        ov.time[k] = select(higher, t + len, ov.time[k]);
+        let higher = ye > max[k];
+        max[k] = select(higher, ye, max[k]);
+        time[k] = select(higher, t + len, time[k]);
         // A maximum inside: the rate turns from + to − (`hermite_extremum` asks for the
         // sign change too); rarely.
-        if !((yd0 > 0.0) & (yd0 * yde < 0.0)) {
-            continue;
+        if (yd0 > 0.0) & (yd0 * yde < 0.0) {
+            let y0 = u0[l] - u0[r];
+            let best = (&mut max[k], &mut time[k]);
+            overlap_between(n, dp, t, len, th_end, l, r, [y0, yd0, ye, yde], best);
         }
-        let Some((_, h)) = crate::response::hermite_extremum(y0, yd0, ye, yde, len) else {
-            continue;
-        };
-        let slack = if th_end < 1.0 {
-            f64::INFINITY
-        } else {
-            (dp.quartic(l) - dp.quartic(r)).abs() / 16.0
-        };
-        if h + slack < ov.max[k] {
-            continue;
-        }
-        let (cl, cr) = (dp.coefficients(n + l), dp.coefficients(n + r));
-        let rate = |th: f64| dense_at(&cl, th) - dense_at(&cr, th);
-        let th = bisect(rate, 0.0, th_end);
-        ov.offer(k, t + th * dp.h, dp.dense(l, th) - dp.dense(r, th));
+    }
+}
+
+/// The interior maximum of a pair of [`overlaps_over`] (components `l`, `r`), its rate
+/// turning from + to − over the step: (u, u̇) at both ends in `ends`; `best` its running
+/// maximum and instant (as `OverlapTracker::offer` updates them).
+#[allow(clippy::too_many_arguments)]
+#[inline(never)]
+fn overlap_between(
+    n: usize,
+    dp: &Dopri5,
+    t: f64,
+    len: f64,
+    th_end: f64,
+    l: usize,
+    r: usize,
+    ends: [f64; 4],
+    best: (&mut f64, &mut f64),
+) {
+    let [y0, yd0, ye, yde] = ends;
+    let Some((_, h)) = crate::response::hermite_extremum(y0, yd0, ye, yde, len) else {
+        return;
+    };
+    let slack = if th_end < 1.0 {
+        f64::INFINITY
+    } else {
+        (dp.quartic(l) - dp.quartic(r)).abs() / 16.0
+    };
+    let (max, time) = best;
+    if h + slack < *max {
+        return;
+    }
+    let (cl, cr) = (dp.coefficients(n + l), dp.coefficients(n + r));
+    let rate = |th: f64| dense_at(&cl, th) - dense_at(&cr, th);
+    let th = bisect(rate, 0.0, th_end);
+    let rel = dp.dense(l, th) - dp.dense(r, th);
+    if rel > *max {
+        (*max, *time) = (rel, t + th * dp.h);
     }
 }
 

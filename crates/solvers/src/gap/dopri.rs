@@ -396,6 +396,14 @@ impl Dopri5 {
         let [k1, .., k7] = &mut self.k;
         k1.copy_from_slice(k7);
     }
+
+    /// [`Dopri5::accept_full`] by swapping the buffers instead of copying them: afterwards
+    /// `y1` and `k[6]` hold stale values (the next [`Dopri5::try_step`] overwrites both).
+    pub fn accept_swap(&mut self, y: &mut Vec<f64>) {
+        assert_eq!(y.len(), self.dim);
+        std::mem::swap(y, &mut self.y1);
+        self.k.swap(0, 6);
+    }
 }
 
 /// [`Dopri5::dense`] from a component's coefficients ([`Dopri5::coefficients`]): the same
