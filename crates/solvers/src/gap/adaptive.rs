@@ -729,6 +729,13 @@ impl<'a> GapStepper<'a> {
         &self.y[..self.sys.n]
     }
 
+    /// Observes the current state for the peaks only: an instant that is neither a history
+    /// sample nor the end of the analysis (whose displacements give the residual drift).
+    fn observe_peaks(&self, tracker: &mut ResponseTracker) {
+        self.sys
+            .observe_all_peaks(&self.stories, tracker, &self.y[..self.sys.n]);
+    }
+
     /// Observes the current state for peaks and, when a history is kept, for its next
     /// sample.
     fn observe(&self, tracker: &mut ResponseTracker, history: bool) {
@@ -1166,23 +1173,31 @@ pub(crate) fn run_from(
                 overlaps_over(sys.n, &dofs, s.dp, s.t, s.y0, s.y1, s.th_end, &mut overlaps);
             }
         })?;
+        // Without a history, an instant before the end updates the peaks only.
+        let observe = |stepper: &GapStepper, tracker: &mut ResponseTracker, last: bool| {
+            if keep || last {
+                stepper.observe(tracker, keep);
+            } else {
+                stepper.observe_peaks(tracker);
+            }
+        };
         match outcome {
             StepOutcome::Rejected => continue,
             StepOutcome::Accepted | StepOutcome::Breakpoint => {}
             StepOutcome::StoryKink { .. } => {
-                stepper.observe(&mut tracker, keep);
+                observe(&stepper, &mut tracker, false);
                 tracker.sample(stepper.t(), history.as_deref_mut());
             }
             StepOutcome::ContactClosed { breakpoint, .. }
             | StepOutcome::ContactOpened { breakpoint, .. } => {
-                stepper.observe(&mut tracker, keep);
+                observe(&stepper, &mut tracker, false);
                 if !breakpoint {
                     tracker.sample(stepper.t(), history.as_deref_mut());
                 }
             }
         }
         if outcome.at_breakpoint() {
-            stepper.observe(&mut tracker, keep);
+            observe(&stepper, &mut tracker, interval + 1 == n_int);
             tracker.sample(stepper.t(), history.as_deref_mut());
             interval += 1;
             if interval < n_int {
