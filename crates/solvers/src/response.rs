@@ -109,11 +109,11 @@ impl ResponseTracker {
         self.observe_peaks(b, u);
         let off = self.offsets[b];
         self.row[off..off + u.len()].copy_from_slice(u);
-        let k = &self.stiffness[b][..u.len()];
+        let k = &self.stiffness[b];
         let mut below = 0.0;
-        for ((s, &kj), &uj) in self.srow[off..off + u.len()].iter_mut().zip(k).zip(u) {
-            *s = kj * (uj - below);
-            below = uj;
+        for (j, s) in self.srow[off..off + u.len()].iter_mut().enumerate() {
+            *s = k[j] * (u[j] - below);
+            below = u[j];
         }
     }
 
@@ -135,21 +135,24 @@ impl ResponseTracker {
     /// that is not a history sample (an interior extremum found between samples).
     #[inline]
     pub fn observe_peaks(&mut self, b: usize, u: &[f64]) {
-        // Slices of the building's length (no bounds checks in the loop) and the running
-        // maxima as selects rather than branches: the same values.
-        let n = u.len();
-        let k = &self.stiffness[b][..n];
-        let vmax = &mut self.shear_max[b][..n];
-        let dmax = &mut self.disp_max[b][..n];
-        let drmax = &mut self.drift_max[b][..n];
+        let k = &self.stiffness[b];
+        let vmax = &mut self.shear_max[b];
+        let dmax = &mut self.disp_max[b];
+        let drmax = &mut self.drift_max[b];
         let mut below = 0.0;
-        for j in 0..n {
+        for j in 0..u.len() {
             let dr = (u[j] - below).abs();
-            drmax[j] = if dr > drmax[j] { dr } else { drmax[j] };
+            if dr > drmax[j] {
+                drmax[j] = dr;
+            }
             let v = (k[j] * (u[j] - below)).abs();
-            vmax[j] = if v > vmax[j] { v } else { vmax[j] };
+            if v > vmax[j] {
+                vmax[j] = v;
+            }
             let d = u[j].abs();
-            dmax[j] = if d > dmax[j] { d } else { dmax[j] };
+            if d > dmax[j] {
+                dmax[j] = d;
+            }
             below = u[j];
         }
     }
