@@ -551,6 +551,32 @@ pub(crate) fn kin(
     }
 }
 
+/// [`kin`] at the event samples θ = j/[`EVENT_SAMPLES`], j = 0 … [`EVENT_SAMPLES`] (the same
+/// values), all at once: the dense output's coefficients read once, the samples
+/// independent of each other.
+fn kin_samples(
+    dp: &Dopri5,
+    n: usize,
+    l: usize,
+    r: Option<usize>,
+    gap: f64,
+) -> [(f64, f64); EVENT_SAMPLES + 1] {
+    let th: [f64; EVENT_SAMPLES + 1] = std::array::from_fn(|j| j as f64 / EVENT_SAMPLES as f64);
+    let (cl, cvl) = (dp.coefficients(l), dp.coefficients(n + l));
+    match r {
+        Some(r) => {
+            let (cr, cvr) = (dp.coefficients(r), dp.coefficients(n + r));
+            std::array::from_fn(|j| {
+                (
+                    dense_at(&cl, th[j]) - dense_at(&cr, th[j]) - gap,
+                    dense_at(&cvl, th[j]) - dense_at(&cvr, th[j]),
+                )
+            })
+        }
+        None => std::array::from_fn(|j| (dense_at(&cl, th[j]) - gap, dense_at(&cvl, th[j]))),
+    }
+}
+
 pub(crate) fn run(
     scene: &Scene,
     sys: &System,
@@ -1033,7 +1059,8 @@ fn earliest_event(
             let (d, dd) = kin(dp, n, l, r, gap, th);
             law.event(d, dd)
         };
-        let (_, mut dd_a) = kin(dp, n, l, r, gap, 0.0);
+        let samples = kin_samples(dp, n, l, r, gap);
+        let (_, mut dd_a) = samples[0];
         let mut th_a = 0.0;
         let mut bracket: Option<(f64, f64)> = None;
         for j in 1..=EVENT_SAMPLES {
@@ -1043,7 +1070,7 @@ fn earliest_event(
                     break;
                 }
             }
-            let (d_b, dd_b) = kin(dp, n, l, r, gap, th_b);
+            let (d_b, dd_b) = samples[j];
             let g_b = law.event(d_b, dd_b);
             if !closed {
                 if g_b > 0.0 {
