@@ -1207,7 +1207,9 @@ pub(crate) fn run_from(
                 &mut scratch,
             );
             if !overlaps.is_empty() {
-                overlaps_over(sys.n, &dofs, s.dp, s.t, s.y0, s.y1, s.th_end, &mut overlaps);
+                let best = (&mut overlaps.max[..], &mut overlaps.time[..]);
+                let dofs = dofs.iter().copied();
+                overlaps_over(sys.n, dofs, s.dp, s.t, s.y0, s.y1, s.th_end, best);
             }
         })?;
         // Without a history, an instant before the end updates the peaks only.
@@ -1314,8 +1316,14 @@ pub(crate) fn dense_overlaps(
     th_end: f64,
     ov: &mut crate::overlap::OverlapTracker,
 ) {
-    let dofs = overlap_dofs(sys, ov);
-    overlaps_over(sys.n, &dofs, dp, t, y, y1, th_end, ov);
+    let crate::overlap::OverlapTracker { pairs, max, time } = ov;
+    let dofs = pairs.iter().map(|p| {
+        (
+            sys.blocks[p.left].off + p.left_dof,
+            sys.blocks[p.right].off + p.right_dof,
+        )
+    });
+    overlaps_over(sys.n, dofs, dp, t, y, y1, th_end, (max, time));
 }
 
 /// The state components (u_left, u_right) of every audited pair of `ov`.
@@ -1334,36 +1342,37 @@ pub(crate) fn overlap_dofs(
         .collect()
 }
 
-/// [`dense_overlaps`] with the pairs' state components ([`overlap_dofs`]) given.
+/// [`dense_overlaps`] with the pairs' state components (u_left, u_right) given in order
+/// (the driver computes them once: [`overlap_dofs`]); `best` the running maxima and their
+/// instants (`OverlapTracker::max`, `time`).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn overlaps_over(
     n: usize,
-    dofs: &[(usize, usize)],
+    dofs: impl IntoIterator<Item = (usize, usize)>,
     dp: &Dopri5,
     t: f64,
     y: &[f64],
     y1: &[f64],
     th_end: f64,
-    ov: &mut crate::overlap::OverlapTracker,
+    best: (&mut [f64], &mut [f64]),
 ) {
     let len = th_end * dp.h;
     if len <= 0.0 {
         return;
     }
     let (u0, v0, u1, v1) = (&y[..n], &y[n..2 * n], &y1[..n], &y1[n..2 * n]);
-    let (max, time) = (&mut ov.max[..dofs.len()], &mut ov.time[..dofs.len()]);
-    for (k, &(l, r)) in dofs.iter().enumerate() {
+    let (max, time) = best;
+    for ((max, time), (l, r)) in max.iter_mut().zip(time.iter_mut()).zip(dofs) {
         let (yd0, ye, yde) = (v0[l] - v0[r], u1[l] - u1[r], v1[l] - v1[r]);
         // `OverlapTracker::offer` without a branch (a new maximum comes unpredictably).
-        let higher = ye > max[k];
-        max[k] = select(higher, ye, max[k]);
-        time[k] = select(higher, t + len, time[k]);
+        let higher = ye > *max;
+        *max = select(higher, ye, *max);
+        *time = select(higher, t + len, *time);
         // A maximum inside: the rate turns from + to − (`hermite_extremum` asks for the
         // sign change too); rarely.
         if (yd0 > 0.0) & (yd0 * yde < 0.0) {
             let y0 = u0[l] - u0[r];
-            let best = (&mut max[k], &mut time[k]);
-            overlap_between(n, dp, t, len, th_end, l, r, [y0, yd0, ye, yde], best);
+            overlap_between(n, dp, t, len, th_end, l, r, [y0, yd0, ye, yde], (max, time));
         }
     }
 }
