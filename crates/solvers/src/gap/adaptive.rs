@@ -1063,14 +1063,13 @@ fn earliest_event(
         let (_, mut dd_a) = samples[0];
         let mut th_a = 0.0;
         let mut bracket: Option<(f64, f64)> = None;
-        for j in 1..=EVENT_SAMPLES {
+        for (j, &(d_b, dd_b)) in samples.iter().enumerate().skip(1) {
             let th_b = j as f64 / EVENT_SAMPLES as f64;
             if let Some((te, _)) = event {
                 if th_a >= te {
                     break;
                 }
             }
-            let (d_b, dd_b) = samples[j];
             let g_b = law.event(d_b, dd_b);
             if !closed {
                 if g_b > 0.0 {
