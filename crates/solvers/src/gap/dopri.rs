@@ -80,6 +80,8 @@ pub struct Dopri5 {
     pub t0: f64,
     pub h: f64,
     facold: f64,
+    /// The vector instructions of this machine ([`Dopri5::try_step`]).
+    arch: pulp::Arch,
 }
 
 impl Dopri5 {
@@ -99,6 +101,7 @@ impl Dopri5 {
             t0: 0.0,
             h: 0.0,
             facold: 1e-4,
+            arch: pulp::Arch::new(),
         }
     }
 
@@ -167,7 +170,44 @@ impl Dopri5 {
 
     /// One trial step of length `h` from (t, y) with `k[0]` = f(t, y). Fills `y1` and
     /// `k[6]` = f(t + h, y1) and returns the error norm (NaN if anything is not finite).
+    ///
+    /// The stage combinations run with the widest vector instructions the machine has
+    /// (AVX2 where available, [`pulp::Arch`]), as do the calls of `f` when the compiler
+    /// inlines them: the same operations in the same order (no fused multiply-add), so the
+    /// results are bit-identical on every machine.
     pub fn try_step<F: FnMut(f64, &[f64], &mut [f64])>(
+        &mut self,
+        f: &mut F,
+        t: f64,
+        y: &[f64],
+        h: f64,
+    ) -> f64 {
+        struct Op<'s, 'f, 'y, F> {
+            dp: &'s mut Dopri5,
+            f: &'f mut F,
+            t: f64,
+            y: &'y [f64],
+            h: f64,
+        }
+        impl<F: FnMut(f64, &[f64], &mut [f64])> pulp::WithSimd for Op<'_, '_, '_, F> {
+            type Output = f64;
+            #[inline(always)]
+            fn with_simd<S: pulp::Simd>(self, _: S) -> f64 {
+                self.dp.try_step_body(self.f, self.t, self.y, self.h)
+            }
+        }
+        let arch = self.arch;
+        arch.dispatch(Op {
+            dp: self,
+            f,
+            t,
+            y,
+            h,
+        })
+    }
+
+    #[inline(always)]
+    fn try_step_body<F: FnMut(f64, &[f64], &mut [f64])>(
         &mut self,
         f: &mut F,
         t: f64,
@@ -176,8 +216,19 @@ impl Dopri5 {
     ) -> f64 {
         let n = self.dim;
         let [k1, k2, k3, k4, k5, k6, k7] = &mut self.k;
+        let (k1, k2, k3, k4, k5, k6, k7) = (
+            &mut k1[..n],
+            &mut k2[..n],
+            &mut k3[..n],
+            &mut k4[..n],
+            &mut k5[..n],
+            &mut k6[..n],
+            &mut k7[..n],
+        );
         let yt = &mut self.ytmp[..n];
         let y = &y[..n];
+        // Every component a stage reads is re-sliced to length n above, so the loops below
+        // carry no bounds checks and vectorise.
         for i in 0..n {
             yt[i] = y[i] + h * A21 * k1[i];
         }
@@ -199,22 +250,35 @@ impl Dopri5 {
                 y[i] + h * (A61 * k1[i] + A62 * k2[i] + A63 * k3[i] + A64 * k4[i] + A65 * k5[i]);
         }
         f(t + h, yt, k6);
-        let y1 = &mut self.y1;
+        let y1 = &mut self.y1[..n];
         for i in 0..n {
             y1[i] =
                 y[i] + h * (A71 * k1[i] + A73 * k3[i] + A74 * k4[i] + A75 * k5[i] + A76 * k6[i]);
         }
         f(t + h, y1, k7);
-        let mut s = 0.0;
-        for i in 0..self.n_err {
+        // The weighted errors r_i² in a vector loop (into `ytmp`, free by now), then their
+        // sum in index order: the same sum as one scalar loop.
+        let ne = self.n_err;
+        let atol = &self.atol[..ne];
+        let rtol = self.rtol;
+        let rr = &mut yt[..ne];
+        for i in 0..ne {
             let e =
                 h * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] + E7 * k7[i]);
-            let sc = self.atol[i] + self.rtol * y[i].abs().max(y1[i].abs());
+            let sc = atol[i] + rtol * y[i].abs().max(y1[i].abs());
             let r = e / sc;
-            s += r * r;
+            rr[i] = r * r;
         }
-        let err = (s / self.n_err as f64).sqrt();
-        if !err.is_finite() || y1.iter().any(|x| !x.is_finite()) {
+        let mut s = 0.0;
+        for &r2 in rr.iter() {
+            s += r2;
+        }
+        let err = (s / ne as f64).sqrt();
+        let mut finite = true;
+        for x in y1.iter() {
+            finite &= x.is_finite();
+        }
+        if !err.is_finite() || !finite {
             return f64::NAN;
         }
         err
@@ -222,10 +286,40 @@ impl Dopri5 {
 
     /// Builds the dense output of the step just tried (from `y` to `y1`, length `h`).
     pub fn prepare_dense(&mut self, t: f64, y: &[f64], h: f64) {
+        struct Op<'s, 'y> {
+            dp: &'s mut Dopri5,
+            y: &'y [f64],
+            h: f64,
+        }
+        impl pulp::WithSimd for Op<'_, '_> {
+            type Output = ();
+            #[inline(always)]
+            fn with_simd<S: pulp::Simd>(self, _: S) {
+                self.dp.prepare_dense_body(self.y, self.h)
+            }
+        }
+        let arch = self.arch;
+        arch.dispatch(Op { dp: self, y, h });
+        self.t0 = t;
+        self.h = h;
+    }
+
+    #[inline(always)]
+    fn prepare_dense_body(&mut self, y: &[f64], h: f64) {
+        let n = self.dim;
         let [k1, _k2, k3, k4, k5, k6, k7] = &self.k;
+        let (k1, k3, k4, k5, k6, k7) = (&k1[..n], &k3[..n], &k4[..n], &k5[..n], &k6[..n], &k7[..n]);
         let [r1, r2, r3, r4, r5] = &mut self.rcont;
-        for i in 0..self.dim {
-            let ydiff = self.y1[i] - y[i];
+        let (r1, r2, r3, r4, r5) = (
+            &mut r1[..n],
+            &mut r2[..n],
+            &mut r3[..n],
+            &mut r4[..n],
+            &mut r5[..n],
+        );
+        let (y, y1) = (&y[..n], &self.y1[..n]);
+        for i in 0..n {
+            let ydiff = y1[i] - y[i];
             let bspl = h * k1[i] - ydiff;
             r1[i] = y[i];
             r2[i] = ydiff;
@@ -234,8 +328,6 @@ impl Dopri5 {
             r5[i] =
                 h * (D1 * k1[i] + D3 * k3[i] + D4 * k4[i] + D5 * k5[i] + D6 * k6[i] + D7 * k7[i]);
         }
-        self.t0 = t;
-        self.h = h;
     }
 
     /// Dense output of component `i` at θ ∈ [0, 1] of the last prepared step.
@@ -244,6 +336,12 @@ impl Dopri5 {
         let t1 = 1.0 - theta;
         let r = &self.rcont;
         r[0][i] + theta * (r[1][i] + t1 * (r[2][i] + theta * (r[3][i] + t1 * r[4][i])))
+    }
+
+    /// The dense-output coefficients (r₁ … r₅) of component `i`, for [`dense_at`].
+    #[inline]
+    pub fn coefficients(&self, i: usize) -> [f64; 5] {
+        std::array::from_fn(|k| self.rcont[k][i])
     }
 
     /// The coefficient r₅ of component `i`: the dense output is the cubic Hermite
@@ -298,6 +396,22 @@ impl Dopri5 {
         let [k1, .., k7] = &mut self.k;
         k1.copy_from_slice(k7);
     }
+
+    /// [`Dopri5::accept_full`] by swapping the buffers instead of copying them: afterwards
+    /// `y1` and `k[6]` hold stale values (the next [`Dopri5::try_step`] overwrites both).
+    pub fn accept_swap(&mut self, y: &mut Vec<f64>) {
+        assert_eq!(y.len(), self.dim);
+        std::mem::swap(y, &mut self.y1);
+        self.k.swap(0, 6);
+    }
+}
+
+/// [`Dopri5::dense`] from a component's coefficients ([`Dopri5::coefficients`]): the same
+/// arithmetic, so the same value.
+#[inline(always)]
+pub fn dense_at(r: &[f64; 5], theta: f64) -> f64 {
+    let t1 = 1.0 - theta;
+    r[0] + theta * (r[1] + t1 * (r[2] + theta * (r[3] + t1 * r[4])))
 }
 
 #[cfg(test)]

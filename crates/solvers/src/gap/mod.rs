@@ -416,6 +416,19 @@ impl System {
         }
     }
 
+    /// Updates the peaks of every building (floor displacements `u`, m, all buildings) at an
+    /// instant that is not a history sample ([`System::observe_peaks`]).
+    pub fn observe_all_peaks(
+        &self,
+        stories: &Stories,
+        tracker: &mut crate::response::ResponseTracker,
+        u: &[f64],
+    ) {
+        for (bi, b) in self.blocks.iter().enumerate() {
+            self.observe_peaks(stories, tracker, bi, &u[b.off..b.off + b.len]);
+        }
+    }
+
     /// Updates the peaks of building `bi` (floor displacements `ub`, m, building-local) at an
     /// instant that is not a history sample, with the law's shears for a yielding building.
     pub fn observe_peaks(
