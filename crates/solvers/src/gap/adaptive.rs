@@ -1153,33 +1153,15 @@ pub(crate) fn run_from(
     };
     let mut stepper = GapStepper::new(scene, sys, first_step, bp(0));
     let keep = history.is_some();
-    let mut tracker = ResponseTracker::new(scene);
-    let mut overlaps = crate::overlap::OverlapTracker::new(scene);
-    let dofs = overlap_dofs(sys, &overlaps);
-    sys.observe_overlaps(&mut overlaps, 0.0, stepper.u());
-    stepper.observe(&mut tracker, keep);
-    tracker.sample(0.0, history.as_deref_mut());
+    let mut obs = DenseObserver::new(scene, sys);
+    sys.observe_overlaps(&mut obs.overlaps, 0.0, stepper.u());
+    stepper.observe(&mut obs.tracker, keep);
+    obs.tracker.sample(0.0, history.as_deref_mut());
 
-    let mut scratch = vec![0.0; sys.n];
     let mut interval = 0usize;
     while interval < n_int {
-        let outcome = stepper.step(bp(interval), &mut |s: &DenseStep| {
-            dense_peaks(
-                sys,
-                s.stories,
-                s.dp,
-                s.y0,
-                s.y1,
-                s.th_end,
-                &mut tracker,
-                &mut scratch,
-            );
-            if !overlaps.is_empty() {
-                let best = (&mut overlaps.max[..], &mut overlaps.time[..]);
-                let dofs = dofs.iter().copied();
-                overlaps_over(sys.n, dofs, s.dp, s.t, s.y0, s.y1, s.th_end, best);
-            }
-        })?;
+        let outcome = stepper.step(bp(interval), &mut |s: &DenseStep| obs.dense(sys, s))?;
+        let tracker = &mut obs.tracker;
         // Without a history, an instant before the end updates the peaks only.
         let observe = |stepper: &GapStepper, tracker: &mut ResponseTracker, last: bool| {
             if keep || last {
@@ -1192,12 +1174,12 @@ pub(crate) fn run_from(
             StepOutcome::Rejected => continue,
             StepOutcome::Accepted | StepOutcome::Breakpoint => {}
             StepOutcome::StoryKink { .. } => {
-                observe(&stepper, &mut tracker, false);
+                observe(&stepper, tracker, false);
                 tracker.sample(stepper.t(), history.as_deref_mut());
             }
             StepOutcome::ContactClosed { breakpoint, .. }
             | StepOutcome::ContactOpened { breakpoint, .. } => {
-                observe(&stepper, &mut tracker, false);
+                observe(&stepper, tracker, false);
                 if !breakpoint {
                     tracker.sample(stepper.t(), history.as_deref_mut());
                 }
@@ -1208,7 +1190,7 @@ pub(crate) fn run_from(
             | StepOutcome::Finished => unreachable!("not an outcome of the adaptive stepper"),
         }
         if outcome.at_breakpoint() {
-            observe(&stepper, &mut tracker, interval + 1 == n_int);
+            observe(&stepper, tracker, interval + 1 == n_int);
             tracker.sample(stepper.t(), history.as_deref_mut());
             interval += 1;
             if interval < n_int {
@@ -1222,11 +1204,11 @@ pub(crate) fn run_from(
         sys,
         scene,
         &stories,
-        tracker.finish(),
+        obs.tracker.finish(),
         impacts,
         energy,
         stats,
-        overlaps,
+        obs.overlaps,
     ))
 }
 
@@ -1274,49 +1256,66 @@ fn select(c: bool, a: f64, b: f64) -> f64 {
     f64::from_bits((a.to_bits() & m) | (b.to_bits() & !m))
 }
 
+/// What the drivers of the adaptive gap element and of the impulse method observe on every
+/// accepted step's dense output: the continuous peaks ([`dense_peaks`]) and the overlap maxima
+/// ([`overlaps_over`], on the pairs' state components found once per run).
+pub(crate) struct DenseObserver {
+    pub tracker: ResponseTracker,
+    pub overlaps: crate::overlap::OverlapTracker,
+    /// (u_left, u_right) state components of every audited pair.
+    dofs: Vec<(usize, usize)>,
+    scratch: Vec<f64>,
+}
+
+impl DenseObserver {
+    pub fn new(scene: &Scene, sys: &System) -> Self {
+        let overlaps = crate::overlap::OverlapTracker::new(scene);
+        let dofs = overlaps
+            .pairs
+            .iter()
+            .map(|p| {
+                (
+                    sys.blocks[p.left].off + p.left_dof,
+                    sys.blocks[p.right].off + p.right_dof,
+                )
+            })
+            .collect();
+        DenseObserver {
+            tracker: ResponseTracker::new(scene),
+            overlaps,
+            dofs,
+            scratch: vec![0.0; sys.n],
+        }
+    }
+
+    /// Observes the accepted step `s`.
+    #[inline(always)]
+    pub fn dense(&mut self, sys: &System, s: &DenseStep) {
+        dense_peaks(
+            sys,
+            s.stories,
+            s.dp,
+            s.y0,
+            s.y1,
+            s.th_end,
+            &mut self.tracker,
+            &mut self.scratch,
+        );
+        if !self.overlaps.is_empty() {
+            let best = (&mut self.overlaps.max[..], &mut self.overlaps.time[..]);
+            let dofs = self.dofs.iter().copied();
+            overlaps_over(sys.n, dofs, s.dp, s.t, s.y0, s.y1, s.th_end, best);
+        }
+    }
+}
+
 /// The overlap audit over an accepted step (issue 11, [`crate::overlap`]): u_left − u_right
 /// of every audited pair at the end of the part taken (θ = `th_end`, state `y1`) and, when
 /// its rate turns from + to − over the step, at the interior maximum, located as in
 /// [`dense_peaks`] (Hermite estimate plus the |r₅|/16 slack against the running maximum,
-/// then bisection on the rate of the dense output). `t` is the step's start, s.
-pub(crate) fn dense_overlaps(
-    sys: &System,
-    dp: &Dopri5,
-    t: f64,
-    y: &[f64],
-    y1: &[f64],
-    th_end: f64,
-    ov: &mut crate::overlap::OverlapTracker,
-) {
-    let crate::overlap::OverlapTracker { pairs, max, time } = ov;
-    let dofs = pairs.iter().map(|p| {
-        (
-            sys.blocks[p.left].off + p.left_dof,
-            sys.blocks[p.right].off + p.right_dof,
-        )
-    });
-    overlaps_over(sys.n, dofs, dp, t, y, y1, th_end, (max, time));
-}
-
-/// The state components (u_left, u_right) of every audited pair of `ov`.
-pub(crate) fn overlap_dofs(
-    sys: &System,
-    ov: &crate::overlap::OverlapTracker,
-) -> Vec<(usize, usize)> {
-    ov.pairs
-        .iter()
-        .map(|p| {
-            (
-                sys.blocks[p.left].off + p.left_dof,
-                sys.blocks[p.right].off + p.right_dof,
-            )
-        })
-        .collect()
-}
-
-/// [`dense_overlaps`] with the pairs' state components (u_left, u_right) given in order
-/// (the driver computes them once: [`overlap_dofs`]); `best` the running maxima and their
-/// instants (`OverlapTracker::max`, `time`).
+/// then bisection on the rate of the dense output). `t` is the step's start, s; `dofs` the
+/// pairs' state components (u_left, u_right) in order ([`DenseObserver`] finds them once per
+/// run); `best` the running maxima and their instants (`OverlapTracker::max`, `time`).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn overlaps_over(
     n: usize,

@@ -3,15 +3,13 @@
 //! points and at events), the history and the overlap audit, and reacts to the
 //! [`StepOutcome`] of [`ImpulseStepper::step`]; the stepper does the integration and the
 //! contact rules. The same loop as the adaptive gap element's ([`crate::gap::adaptive`]),
-//! with the same observation functions ([`dense_peaks`], [`dense_overlaps`]).
+//! with the same observation of each dense step ([`DenseObserver`]).
 
 use structure::Scene;
 
 use super::stepper::ImpulseStepper;
-use crate::gap::adaptive::{dense_overlaps, dense_peaks, DenseStep};
+use crate::gap::adaptive::{DenseObserver, DenseStep};
 use crate::gap::System;
-use crate::overlap::OverlapTracker;
-use crate::response::ResponseTracker;
 use crate::step::StepOutcome;
 use crate::{History, RunOutput, SolverError};
 
@@ -32,30 +30,15 @@ pub(super) fn run(
     };
     let mut stepper = ImpulseStepper::new(scene, sys, bp(0))?;
     let keep = history.is_some();
-    let mut tracker = ResponseTracker::new(scene);
-    let mut overlaps = OverlapTracker::new(scene);
-    sys.observe_overlaps(&mut overlaps, 0.0, stepper.u());
-    stepper.observe(&mut tracker, keep);
-    tracker.sample(0.0, history.as_deref_mut());
+    let mut obs = DenseObserver::new(scene, sys);
+    sys.observe_overlaps(&mut obs.overlaps, 0.0, stepper.u());
+    stepper.observe(&mut obs.tracker, keep);
+    obs.tracker.sample(0.0, history.as_deref_mut());
 
-    let mut scratch = vec![0.0; sys.n];
     let mut interval = 0usize;
     while interval < n_int {
-        let outcome = stepper.step(bp(interval), &mut |s: &DenseStep| {
-            dense_peaks(
-                sys,
-                s.stories,
-                s.dp,
-                s.y0,
-                s.y1,
-                s.th_end,
-                &mut tracker,
-                &mut scratch,
-            );
-            if !overlaps.is_empty() {
-                dense_overlaps(sys, s.dp, s.t, s.y0, s.y1, s.th_end, &mut overlaps);
-            }
-        })?;
+        let outcome = stepper.step(bp(interval), &mut |s: &DenseStep| obs.dense(sys, s))?;
+        let (tracker, overlaps) = (&mut obs.tracker, &mut obs.overlaps);
         match outcome {
             // Nothing moved (a release at the step start changes the held set only).
             StepOutcome::Rejected | StepOutcome::Released { .. } => continue,
@@ -65,8 +48,8 @@ pub(super) fn run(
             | StepOutcome::ContactOpened { breakpoint, .. }
             | StepOutcome::StoryKink { breakpoint } => {
                 if !breakpoint {
-                    sys.observe_overlaps(&mut overlaps, stepper.t(), stepper.u());
-                    stepper.observe(&mut tracker, keep);
+                    sys.observe_overlaps(overlaps, stepper.t(), stepper.u());
+                    stepper.observe(tracker, keep);
                     tracker.sample(stepper.t(), history.as_deref_mut());
                 }
             }
@@ -75,8 +58,8 @@ pub(super) fn run(
             | StepOutcome::Finished => unreachable!("not an outcome of the impulse stepper"),
         }
         if outcome.at_breakpoint() {
-            sys.observe_overlaps(&mut overlaps, stepper.t(), stepper.u());
-            stepper.observe(&mut tracker, keep);
+            sys.observe_overlaps(overlaps, stepper.t(), stepper.u());
+            stepper.observe(tracker, keep);
             tracker.sample(stepper.t(), history.as_deref_mut());
             interval += 1;
             stepper.enter_segment((interval < n_int).then(|| sys.segment(interval)));
@@ -94,7 +77,7 @@ pub(super) fn run(
             "off".into()
         }
     );
-    let mut buildings = tracker.finish();
+    let mut buildings = obs.tracker.finish();
     for (bi, b) in buildings.iter_mut().enumerate() {
         b.hysteretic_energy = stories.building_hysteretic_energy(bi);
     }
@@ -109,7 +92,7 @@ pub(super) fn run(
         energy,
         stats,
         r_n: Vec::new(),
-        overlaps: overlaps.finish(scene),
+        overlaps: obs.overlaps.finish(scene),
         unmodelled: crate::overlap::unmodelled(scene),
     })
 }

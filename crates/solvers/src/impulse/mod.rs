@@ -97,9 +97,9 @@
 //!   (holding forces, projection, release), `contact.rs` (contact rows in mass-scaled
 //!   coordinates);
 //! - `driver.rs`: the one loop over the record intervals, owning the response tracker
-//!   (continuous peaks from the dense output with the adaptive gap element's
-//!   `dense_peaks`, samples at record points and events), the
-//!   history and the overlap audit (its `dense_overlaps`).
+//!   (continuous peaks and overlap maxima from the dense output with the adaptive gap
+//!   element's `DenseObserver`, samples at record points and events), the history and the
+//!   overlap audit.
 //!
 //! The contact books are not the gap element's `ContactLedger` (modes and spring
 //! episodes from closure to opening, with a duration, a peak force and a penetration
