@@ -109,6 +109,29 @@ pub struct EnergyAudit {
     pub balance_error: f64,
 }
 
+impl EnergyAudit {
+    /// The audit of these terms (J) with its balance error: the one place every solver
+    /// closes the balance.
+    pub fn closed(
+        initial: f64,
+        input: f64,
+        damping: f64,
+        contact: f64,
+        hysteretic: f64,
+        final_: f64,
+    ) -> EnergyAudit {
+        EnergyAudit {
+            initial,
+            input,
+            damping,
+            contact,
+            hysteretic,
+            final_,
+            balance_error: initial + input - damping - contact - hysteretic - final_,
+        }
+    }
+}
+
 /// Contact flexibility fractions r_N at each contact with the modes actually kept.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ContactFlexibility {

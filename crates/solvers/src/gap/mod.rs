@@ -500,15 +500,7 @@ pub(crate) fn audit(
 ) -> EnergyAudit {
     let contact = work + stored0 - stored_t;
     let final_ = mech_t + stored_t;
-    EnergyAudit {
-        initial,
-        input,
-        damping,
-        contact,
-        hysteretic,
-        final_,
-        balance_error: initial + input - damping - contact - hysteretic - final_,
-    }
+    EnergyAudit::closed(initial, input, damping, contact, hysteretic, final_)
 }
 
 /// The common result of both gap-element integrators: impacts in time order, no persistent

@@ -134,13 +134,11 @@ impl ImpulseStepper<'_> {
             let vb = v_before[k];
             let va = self.rel_velocity(c);
             let p = imp.iter().find(|(x, _)| *x == c).map_or(0.0, |&(_, p)| p);
-            let undefined = if vb <= cfg.capture_velocity {
-                Some("touching: approach speed at most momentum.capture_velocity")
-            } else if captured[k] {
-                Some("chattering capture: the accumulating impacts resolved as one plastic impulse")
-            } else {
-                None
-            };
+            let undefined = crate::momentum::impact::undefined_restitution(
+                vb,
+                cfg.capture_velocity,
+                captured[k],
+            );
             self.impacts.push(Impact {
                 contact: c,
                 time: t,

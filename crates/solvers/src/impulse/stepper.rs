@@ -524,15 +524,7 @@ impl<'a> ImpulseStepper<'a> {
         let (input, damping) = (y[2 * n], y[2 * n + 1]);
         let contact = y[2 * n + 2] + self.contact_loss;
         let hysteretic = self.s.stories.hysteretic_energy();
-        let energy = EnergyAudit {
-            initial,
-            input,
-            damping,
-            contact,
-            hysteretic,
-            final_,
-            balance_error: initial + input - damping - contact - hysteretic - final_,
-        };
+        let energy = EnergyAudit::closed(initial, input, damping, contact, hysteretic, final_);
         Ok((
             self.impacts,
             self.phases,

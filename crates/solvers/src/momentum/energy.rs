@@ -25,14 +25,14 @@ pub struct EnergyAccount {
 
 impl EnergyAccount {
     pub fn finish(&self, final_: f64) -> EnergyAudit {
-        EnergyAudit {
-            initial: self.initial,
-            input: self.input,
-            damping: self.damping,
-            contact: self.contact,
-            hysteretic: 0.0,
+        // (x − 0.0 = x: the same balance as without the hysteretic term.)
+        EnergyAudit::closed(
+            self.initial,
+            self.input,
+            self.damping,
+            self.contact,
+            0.0,
             final_,
-            balance_error: self.initial + self.input - self.damping - self.contact - final_,
-        }
+        )
     }
 }

@@ -197,13 +197,7 @@ impl Stepper<'_> {
         self.energy.contact += ke0 - ke1;
         for (k, &c) in contacts.iter().enumerate() {
             let vb = v_before[k];
-            let undefined = if vb <= p.options.capture_velocity {
-                Some("touching: approach speed at most momentum.capture_velocity")
-            } else if captured[k] {
-                Some("chattering capture: the accumulating impacts resolved as one plastic impulse")
-            } else {
-                None
-            };
+            let undefined = undefined_restitution(vb, p.options.capture_velocity, captured[k]);
             self.impacts.push(Impact {
                 contact: c,
                 time: t,
@@ -258,6 +252,19 @@ impl Stepper<'_> {
         self.energy.contact += ke0 - self.kinetic();
         self.refresh_rates();
         Ok(())
+    }
+}
+
+/// Why the restitution of a rigid impact is not reported, if it is not: a touching contact
+/// (approach speed `vb` at most `capture`, m/s) or a chattering capture (`captured`). Shared
+/// by the momentum and impulse methods.
+pub(crate) fn undefined_restitution(vb: f64, capture: f64, captured: bool) -> Option<&'static str> {
+    if vb <= capture {
+        Some("touching: approach speed at most momentum.capture_velocity")
+    } else if captured {
+        Some("chattering capture: the accumulating impacts resolved as one plastic impulse")
+    } else {
+        None
     }
 }
 
