@@ -267,23 +267,30 @@ impl Stepper<'_> {
     /// Hermite error bound over both buildings' modes, deferred refinement).
     #[inline(always)]
     fn observe_overlaps(&mut self, len: f64, stored: &mut Option<usize>) {
-        let t = self.s.t;
         // First pass, every pair: the sample (a running maximum, branch-free) and whether the
         // rate turns from + to − over the interval (rare: only those go on).
         let mut turns = false;
         {
             let (u, ud, udp) = (&self.u, &self.ud, &self.ud_prev);
             let ov = &mut self.overlaps;
-            let (max, time) = (&mut ov.max[..], &mut ov.time[..]);
-            for (k, op) in ov.pairs.iter().enumerate() {
-                let (l, i, r, j) = (op.left, op.left_dof + 1, op.right, op.right_dof + 1);
-                let y1 = u[l][i] - u[r][j];
-                let up = y1 > max[k];
-                max[k] = if up { y1 } else { max[k] };
-                time[k] = if up { t } else { time[k] };
-                let turn = (udp[l][i] - udp[r][j] > 0.0) & (ud[l][i] - ud[r][j] < 0.0);
-                self.flags[k] = turn as u8;
-                turns |= turn;
+            for run in &self.overlap_runs {
+                let (n, k0) = (run.n, run.k0);
+                let (i0, j0) = (run.i0 + 1, run.j0 + 1); // the leading zero of the buffers
+                let (ul, ur) = (&u[run.left][i0..i0 + n], &u[run.right][j0..j0 + n]);
+                let (vl, vr) = (&ud[run.left][i0..i0 + n], &ud[run.right][j0..j0 + n]);
+                let (pl, pr) = (&udp[run.left][i0..i0 + n], &udp[run.right][j0..j0 + n]);
+                let max = &mut ov.max[k0..k0 + n];
+                let time = &mut ov.time[k0..k0 + n];
+                let flags = &mut self.flags[k0..k0 + n];
+                for t in 0..n {
+                    let y1 = ul[t] - ur[t];
+                    let up = y1 > max[t];
+                    max[t] = if up { y1 } else { max[t] };
+                    time[t] = if up { self.s.t } else { time[t] };
+                    let turn = (pl[t] - pr[t] > 0.0) & (vl[t] - vr[t] < 0.0);
+                    flags[t] = turn as u8;
+                    turns |= turn;
+                }
             }
         }
         if !(len > 0.0) || !turns {

@@ -154,6 +154,21 @@ pub struct Stepper<'a> {
     /// computed it (`env_e2_fresh`) for its contact bound.
     pub(super) env_e2: Vec<f64>,
     pub(super) env_e2_fresh: bool,
+    /// The overlap pairs as runs of consecutive pairs whose floors both step by one (the
+    /// paper scene's 14 pairs are one run): the first pass of the audit over slices.
+    pub(super) overlap_runs: Vec<OverlapRun>,
+}
+
+/// Pairs `k0 .. k0 + n` of the overlap audit: floors `i0 + t` of building `left` against
+/// `j0 + t` of building `right`, t < n.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct OverlapRun {
+    pub k0: usize,
+    pub n: usize,
+    pub left: usize,
+    pub i0: usize,
+    pub right: usize,
+    pub j0: usize,
 }
 
 impl<'a> Stepper<'a> {
@@ -298,6 +313,7 @@ impl<'a> Stepper<'a> {
             skip: vec![false; p.modal.buildings.len()],
             env_e2: vec![0.0; p.modal.buildings.len()],
             env_e2_fresh: false,
+            overlap_runs: Vec::new(),
             coef: vec![
                 0.0;
                 p.modal
@@ -342,6 +358,26 @@ impl<'a> Stepper<'a> {
             })
             .collect();
         st.overlap_lower = vec![f64::NEG_INFINITY; st.overlaps.pairs.len()];
+        for (k, op) in st.overlaps.pairs.iter().enumerate() {
+            match st.overlap_runs.last_mut() {
+                Some(r)
+                    if r.left == op.left
+                        && r.right == op.right
+                        && r.i0 + r.n == op.left_dof
+                        && r.j0 + r.n == op.right_dof =>
+                {
+                    r.n += 1
+                }
+                _ => st.overlap_runs.push(OverlapRun {
+                    k0: k,
+                    n: 1,
+                    left: op.left,
+                    i0: op.left_dof,
+                    right: op.right,
+                    j0: op.right_dof,
+                }),
+            }
+        }
         let widest = p.modal.buildings.iter().map(|b| b.padded_floors()).max();
         st.flags = vec![0; (2 * widest.unwrap_or(0)).max(st.overlaps.pairs.len())];
         let w2 = &p.omega2;
