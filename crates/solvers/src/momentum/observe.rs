@@ -146,12 +146,27 @@ impl Stepper<'_> {
         if self.overlaps.is_empty() {
             return true;
         }
-        for (k, op) in self.overlaps.pairs.iter().enumerate() {
-            let (rl, rr) = (self.env_r[op.left], self.env_r[op.right]);
+        if self.overlap_stale {
+            // Per run, the smallest max(maximum, lower)/f_y of its pairs (0 if one is not
+            // positive): every pair of the run passes the test below iff this one does.
+            for (run, lim) in self.overlap_runs.iter().zip(&mut self.overlap_lim) {
+                let mut m = f64::INFINITY;
+                for k in run.k0..run.k0 + run.n {
+                    let l = self.overlaps.max[k].max(self.overlap_lower[k]) * self.overlap_inv[k];
+                    m = if l > 0.0 { m.min(l) } else { 0.0 };
+                    if m == 0.0 {
+                        break;
+                    }
+                }
+                *lim = m;
+            }
+            self.overlap_stale = false;
+        }
+        for (run, &lim) in self.overlap_runs.iter().zip(&self.overlap_lim) {
+            let (rl, rr) = (self.env_r[run.left], self.env_r[run.right]);
             // √(R_l² + R_r²) < best/f_y, squared (best > 0 needed, the bound is ≥ 0).
-            let lim = self.overlaps.max[k].max(self.overlap_lower[k]) * self.overlap_inv[k];
             if !(lim > 0.0 && (rl * rl + rr * rr) * (1.0 + 1e-9) < lim * lim) {
-                // This pair may reach its maximum: observe every building.
+                // A pair may reach its maximum: observe every building.
                 if any {
                     self.skip.fill(false);
                 }
@@ -269,7 +284,7 @@ impl Stepper<'_> {
     fn observe_overlaps(&mut self, len: f64, stored: &mut Option<usize>) {
         // First pass, every pair: the sample (a running maximum, branch-free) and whether the
         // rate turns from + to − over the interval (rare: only those go on).
-        let mut turns = false;
+        let (mut turns, mut raised) = (false, false);
         {
             let (u, ud, udp) = (&self.u, &self.ud, &self.ud_prev);
             let ov = &mut self.overlaps;
@@ -290,9 +305,11 @@ impl Stepper<'_> {
                     let turn = (pl[t] - pr[t] > 0.0) & (vl[t] - vr[t] < 0.0);
                     flags[t] = turn as u8;
                     turns |= turn;
+                    raised |= up;
                 }
             }
         }
+        self.overlap_stale |= raised;
         if !(len > 0.0) || !turns {
             return;
         }
@@ -340,6 +357,7 @@ impl Stepper<'_> {
                 continue;
             }
             self.overlap_lower[k] = self.overlap_lower[k].max(h - bound);
+            self.overlap_stale = true;
             let interval =
                 *stored.get_or_insert_with(|| self.deferred.store(&self.interval, self.s.t));
             self.deferred.candidates.push(Candidate {

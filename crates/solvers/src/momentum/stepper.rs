@@ -157,6 +157,10 @@ pub struct Stepper<'a> {
     /// The overlap pairs as runs of consecutive pairs whose floors both step by one (the
     /// paper scene's 14 pairs are one run): the first pass of the audit over slices.
     pub(super) overlap_runs: Vec<OverlapRun>,
+    /// Per run: min_k max(maximum_k, lower_k)/f_y,k over its pairs (0 if some pair has no
+    /// positive one yet), recomputed when a maximum or a lower bound grew (`overlap_stale`).
+    pub(super) overlap_lim: Vec<f64>,
+    pub(super) overlap_stale: bool,
 }
 
 /// Pairs `k0 .. k0 + n` of the overlap audit: floors `i0 + t` of building `left` against
@@ -314,6 +318,8 @@ impl<'a> Stepper<'a> {
             env_e2: vec![0.0; p.modal.buildings.len()],
             env_e2_fresh: false,
             overlap_runs: Vec::new(),
+            overlap_lim: Vec::new(),
+            overlap_stale: true,
             coef: vec![
                 0.0;
                 p.modal
@@ -378,6 +384,7 @@ impl<'a> Stepper<'a> {
                 }),
             }
         }
+        st.overlap_lim = vec![0.0; st.overlap_runs.len()];
         let widest = p.modal.buildings.iter().map(|b| b.padded_floors()).max();
         st.flags = vec![0; (2 * widest.unwrap_or(0)).max(st.overlaps.pairs.len())];
         let w2 = &p.omega2;
