@@ -115,12 +115,13 @@ pub struct Candidate {
 #[derive(Debug, Clone, Default)]
 pub struct Deferred {
     nm: usize,
-    /// Per stored interval: x0, v0 and the held-contact loads (zeros if none), `nm` each.
-    x0: Vec<f64>,
-    v0: Vec<f64>,
+    /// Per stored interval: x0 then v0, `nm` each.
+    state: Vec<f64>,
+    /// Held-contact loads of the stored intervals that have some, `nm` each.
     fc: Vec<f64>,
-    /// Per stored interval: (a0, a1, tau, integrated length, sample time at its end, held).
-    meta: Vec<(f64, f64, f64, f64, f64, bool)>,
+    /// Per stored interval: (a0, a1, tau, integrated length, sample time at its end, offset
+    /// of its held-contact loads in `fc` if held).
+    meta: Vec<(f64, f64, f64, f64, f64, Option<usize>)>,
     pub candidates: Vec<Candidate>,
 }
 
@@ -141,6 +142,8 @@ impl Deferred {
     pub fn new(nm: usize) -> Self {
         Deferred {
             nm,
+            // Room for 256 intervals (the paper scene stores about 570): few reallocations.
+            state: Vec::with_capacity(512 * nm),
             ..Default::default()
         }
     }
@@ -148,26 +151,26 @@ impl Deferred {
     /// Stores the interval `iv` (integrated up to the sample at `t_end`); returns its index.
     pub fn store(&mut self, iv: &Interval, t_end: f64) -> usize {
         let nm = self.nm;
-        self.x0.extend_from_slice(&iv.x0[..nm]);
-        self.v0.extend_from_slice(&iv.v0[..nm]);
-        match &iv.fc {
-            Some(f) => self.fc.extend_from_slice(&f[..nm]),
-            None => self.fc.resize(self.fc.len() + nm, 0.0),
-        }
+        self.state.extend_from_slice(&iv.x0[..nm]);
+        self.state.extend_from_slice(&iv.v0[..nm]);
+        let held = iv.fc.as_ref().map(|f| {
+            self.fc.extend_from_slice(&f[..nm]);
+            self.fc.len() - nm
+        });
         self.meta
-            .push((iv.a0, iv.a1, iv.tau, iv.tau_done, t_end, iv.fc.is_some()));
+            .push((iv.a0, iv.a1, iv.tau, iv.tau_done, t_end, held));
         self.meta.len() - 1
     }
 
     /// The stored interval `k`.
     pub fn interval(&self, k: usize) -> StoredInterval<'_> {
-        let (nm, r) = (self.nm, k * self.nm..(k + 1) * self.nm);
+        let nm = self.nm;
         let (a0, a1, tau, len, t_end, held) = self.meta[k];
-        let _ = nm;
+        let (x0, v0) = self.state[2 * k * nm..2 * (k + 1) * nm].split_at(nm);
         StoredInterval {
-            x0: &self.x0[r.clone()],
-            v0: &self.v0[r.clone()],
-            fc: held.then(|| &self.fc[r]),
+            x0,
+            v0,
+            fc: held.map(|o| &self.fc[o..o + nm]),
             a0,
             a1,
             tau,
