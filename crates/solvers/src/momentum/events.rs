@@ -12,7 +12,7 @@
 //! - δ₀ ≥ 0 (touching just after an impact or a release): δ̇₀ > 0 with δ₁ ≥ 0 is an
 //!   immediate (zero-speed) closure (with δ₁ < 0 a round-off overlap, ignored); otherwise the minimum is located first and the crossing after it.
 
-use roots::Convergency;
+use roots::{Convergency, SearchError};
 
 use super::impulse::ContactGeom;
 use super::modal::{Arc, Modal};
@@ -33,6 +33,81 @@ impl Convergency<f64> for Conv {
     fn is_iteration_limit_reached(&mut self, iter: usize) -> bool {
         self.iterations = self.iterations.max(iter);
         iter >= 200
+    }
+}
+
+/// Brent's method exactly as `roots::find_root_brent` (the same points, the same
+/// arithmetic, the same convergence calls, hence the same result bit for bit), without its
+/// re-evaluations of f at the bracket end kept by each iteration: that end's value is
+/// already known (f is a pure function of s), so each iteration costs one evaluation of f
+/// instead of two.
+pub fn find_root_brent<Func>(
+    a: f64,
+    b: f64,
+    mut f: Func,
+    convergency: &mut dyn Convergency<f64>,
+) -> Result<f64, SearchError>
+where
+    Func: FnMut(f64) -> f64,
+{
+    #[inline(always)]
+    fn arrange(a: f64, ya: f64, b: f64, yb: f64) -> (f64, f64, f64, f64) {
+        if ya.abs() > yb.abs() {
+            (a, ya, b, yb)
+        } else {
+            (b, yb, a, ya)
+        }
+    }
+    let fa = f(a);
+    let fb = f(b);
+    let (mut a, mut ya, mut b, mut yb) = arrange(a, fa, b, fb);
+    if ya * yb > 0.0 {
+        return Err(SearchError::NoBracketing);
+    }
+    let (mut c, mut yc, mut d) = (a, ya, a);
+    let mut flag = true;
+    let mut iter = 0;
+    loop {
+        if convergency.is_root_found(ya) {
+            return Ok(a);
+        }
+        if convergency.is_root_found(yb) {
+            return Ok(b);
+        }
+        if convergency.is_converged(a, b) {
+            return Ok(c);
+        }
+        let mut s = if (ya != yc) && (yb != yc) {
+            a * yb * yc / ((ya - yb) * (ya - yc))
+                + b * ya * yc / ((yb - ya) * (yb - yc))
+                + c * ya * yb / ((yc - ya) * (yc - yb))
+        } else {
+            b - yb * (b - a) / (yb - ya)
+        };
+        let cond1 = (s - b) * (s - (3.0 * a + b) / 4.0) > 0.0;
+        let cond2 = flag && (s - b).abs() >= (b - c).abs() / 2.0;
+        let cond3 = !flag && (s - b).abs() >= (c - d).abs() / 2.0;
+        let cond4 = flag && convergency.is_converged(b, c);
+        let cond5 = !flag && convergency.is_converged(c, d);
+        if cond1 || cond2 || cond3 || cond4 || cond5 {
+            s = (a + b) / 2.0;
+            flag = true;
+        } else {
+            flag = false;
+        }
+        let ys = f(s);
+        d = c;
+        c = b;
+        yc = yb;
+        if ya * ys < 0.0 {
+            (a, ya, b, yb) = arrange(a, ya, s, ys);
+        } else {
+            (a, ya, b, yb) = arrange(s, ys, b, yb);
+        }
+        iter += 1;
+        if convergency.is_iteration_limit_reached(iter) {
+            return Err(SearchError::NoConvergency);
+        }
     }
 }
 
@@ -79,9 +154,9 @@ impl Locator<'_> {
             iterations: 0,
         };
         let r = if derivative {
-            roots::find_root_brent(a, b, |s| self.ddelta(s), &mut conv)
+            find_root_brent(a, b, |s| self.ddelta(s), &mut conv)
         } else {
-            roots::find_root_brent(a, b, |s| self.delta(s), &mut conv)
+            find_root_brent(a, b, |s| self.delta(s), &mut conv)
         };
         self.iterations += conv.iterations as u64 + 1;
         match r {
