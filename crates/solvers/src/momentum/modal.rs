@@ -428,12 +428,40 @@ impl Arc {
     /// (q(s), q̇(s)).
     #[inline]
     pub fn xv(&self, s: f64) -> (f64, f64) {
+        let t = self.trig(s);
+        self.xv_from(s, t)
+    }
+
+    /// The transcendental part of an evaluation at s: [e^{−ζωs}, sin ω_d s, cos ω_d s].
+    #[inline]
+    pub fn trig(&self, s: f64) -> [f64; 3] {
         let e = (-self.c * s).exp();
         let (sn, cs) = (self.d * s).sin_cos();
+        [e, sn, cs]
+    }
+
+    /// (q(s), q̇(s)) from [`Arc::trig`] at s.
+    #[inline]
+    pub fn xv_from(&self, s: f64, [e, sn, cs]: [f64; 3]) -> (f64, f64) {
         let h = self.a * cs + self.b * sn;
         let hd =
             (self.b * self.d - self.c * self.a) * cs - (self.a * self.d + self.c * self.b) * sn;
         (self.alpha + self.beta * s + e * h, self.beta + e * hd)
+    }
+
+    /// q(s) alone from [`Arc::trig`] at s (the same bits as `xv_from(s, t).0`).
+    #[inline]
+    pub fn x_from(&self, s: f64, [e, sn, cs]: [f64; 3]) -> f64 {
+        let h = self.a * cs + self.b * sn;
+        self.alpha + self.beta * s + e * h
+    }
+
+    /// q̇(s) alone from [`Arc::trig`] at s (the same bits as `xv_from(s, t).1`).
+    #[inline]
+    pub fn v_from(&self, [e, sn, cs]: [f64; 3]) -> f64 {
+        let hd =
+            (self.b * self.d - self.c * self.a) * cs - (self.a * self.d + self.c * self.b) * sn;
+        self.beta + e * hd
     }
 
     /// Load at s.
@@ -450,21 +478,31 @@ impl Arc {
 
     /// ∫₀ˢ q̇² dσ in closed form.
     pub fn damping_integral(&self, s: f64) -> f64 {
+        self.damping_integral_from(s, self.trig(s))
+    }
+
+    /// [`Arc::damping_integral`] given [`Arc::trig`] at s (e^{−ζωs}, sin ω_d s, cos ω_d s
+    /// are the values of its first exponential integral).
+    #[inline]
+    pub fn damping_integral_from(&self, s: f64, [e1, sn1, cs1]: [f64; 3]) -> f64 {
         let (c, d) = (self.c, self.d);
         let cc = self.b * d - c * self.a;
         let dd = -(self.a * d + c * self.b);
         // ∫ e^{ps} cos qs, ∫ e^{ps} sin qs over [0, s]
-        let ecs = |p: f64, q: f64| -> (f64, f64) {
-            let e = (p * s).exp();
-            let (sn, cs) = (q * s).sin_cos();
+        let fin = |p: f64, q: f64, e: f64, sn: f64, cs: f64| -> (f64, f64) {
             let den = p * p + q * q;
             (
                 (e * (p * cs + q * sn) - p) / den,
                 (e * (p * sn - q * cs) + q) / den,
             )
         };
+        let ecs = |p: f64, q: f64| -> (f64, f64) {
+            let e = (p * s).exp();
+            let (sn, cs) = (q * s).sin_cos();
+            fin(p, q, e, sn, cs)
+        };
         let x = |p: f64| if p == 0.0 { s } else { (p * s).exp_m1() / p };
-        let (e1c, e1s) = ecs(-c, d);
+        let (e1c, e1s) = fin(-c, d, e1, sn1, cs1);
         let (e2c, e2s) = ecs(-2.0 * c, 2.0 * d);
         let j1 = cc * e1c + dd * e1s;
         let j2 = 0.5 * (cc * cc + dd * dd) * x(-2.0 * c)

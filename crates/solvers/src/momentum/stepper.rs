@@ -97,6 +97,9 @@ pub struct Stepper<'a> {
     pub(super) shear_max: Vec<Vec<f64>>,
     pub(super) stiffness: Vec<Vec<f64>>,
     pub(super) arcs: Vec<Arc>,
+    /// [`Arc::trig`] of every arc at the segment end τ (shared by the end state and the
+    /// damping integral).
+    pub(super) trig_end: Vec<[f64; 3]>,
     /// Floor displacements and velocities at the current and at the previous sample, per
     /// building. These four
     /// buffers hold a leading zero (the ground) before the padded floors: floor i is at
@@ -251,6 +254,7 @@ impl<'a> Stepper<'a> {
                 .map(|b| vec![0.0; b.padded_floors() + 1])
                 .collect(),
             arcs: Vec::with_capacity(nm),
+            trig_end: vec![[0.0; 3]; nm],
             ud: p
                 .modal
                 .buildings
@@ -735,9 +739,11 @@ impl<'a> Stepper<'a> {
         self.begin_interval(a0, a1, tau, fc);
         self.build_arcs(a0, a1, tau, fc);
         for n in 0..self.arcs.len() {
-            let (x1, v1) = self.arcs[n].xv(tau);
+            let t = self.arcs[n].trig(tau);
+            let (x1, v1) = self.arcs[n].xv_from(tau, t);
             self.xn[n] = x1;
             self.vn[n] = v1;
+            self.trig_end[n] = t;
         }
         let tol = 2.0 * f64::EPSILON * (self.s.t + tau) + 1e-300;
         let mut first: Option<f64> = None;
@@ -823,10 +829,12 @@ impl<'a> Stepper<'a> {
         let m = &p.modal;
         for n in 0..self.arcs.len() {
             let a = self.arcs[n];
-            let (x1, v1) = if s_end == tau {
-                (self.xn[n], self.vn[n])
+            let (x1, v1, t) = if s_end == tau {
+                (self.xn[n], self.vn[n], self.trig_end[n])
             } else {
-                a.xv(s_end)
+                let t = a.trig(s_end);
+                let (x1, v1) = a.xv_from(s_end, t);
+                (x1, v1, t)
             };
             if s_end > 0.0 {
                 let w = a.load_work(s_end, x1, v1);
@@ -834,7 +842,8 @@ impl<'a> Stepper<'a> {
                 let wc = extra * (x1 - a.x0);
                 self.energy.input += w - wc;
                 self.energy.contact -= wc;
-                self.energy.damping += 2.0 * m.zeta[n] * m.omega[n] * a.damping_integral(s_end);
+                self.energy.damping +=
+                    2.0 * m.zeta[n] * m.omega[n] * a.damping_integral_from(s_end, t);
             }
             self.s.x[n] = x1;
             self.s.v[n] = v1;
