@@ -15,7 +15,7 @@
 use roots::{Convergency, SearchError};
 
 use super::impulse::ContactGeom;
-use super::modal::{Arc, Modal};
+use super::modal::{Arc, Modal, TrigMemo};
 
 /// Brent convergence: |Δs| below `tol`, exact zero, iteration count recorded.
 pub struct Conv {
@@ -125,24 +125,38 @@ pub struct Locator<'a> {
     /// was resolved: see `Stepper`).
     pub shift: f64,
     pub iterations: u64,
+    /// Per arc: memo of its transcendental values (empty where no evaluation is needed).
+    pub memo: &'a mut [TrigMemo],
 }
 
 impl Locator<'_> {
-    fn delta(&self, s: f64) -> f64 {
+    fn delta(&mut self, s: f64) -> f64 {
         let mut d = 0.0;
-        for (g, a) in self.contact.g.iter().zip(self.arcs) {
+        for ((g, a), m) in self
+            .contact
+            .g
+            .iter()
+            .zip(self.arcs)
+            .zip(self.memo.iter_mut())
+        {
             if *g != 0.0 {
-                d += g * a.xv(s).0;
+                d += g * a.x_from(s, m.get(a, s));
             }
         }
         d - self.contact.gap - self.shift
     }
 
-    fn ddelta(&self, s: f64) -> f64 {
+    fn ddelta(&mut self, s: f64) -> f64 {
         let mut d = 0.0;
-        for (g, a) in self.contact.g.iter().zip(self.arcs) {
+        for ((g, a), m) in self
+            .contact
+            .g
+            .iter()
+            .zip(self.arcs)
+            .zip(self.memo.iter_mut())
+        {
             if *g != 0.0 {
-                d += g * a.xv(s).1;
+                d += g * a.v_from(m.get(a, s));
             }
         }
         d
@@ -163,7 +177,7 @@ impl Locator<'_> {
             Ok(s) => s.clamp(a, b),
             // No bracket (round-off at an end): the end where the function is nearer zero.
             Err(_) => {
-                let f = |s: f64| {
+                let mut f = |s: f64| {
                     if derivative {
                         self.ddelta(s)
                     } else {

@@ -379,6 +379,50 @@ impl StepCoeffs {
     }
 }
 
+/// A small memo of [`Arc::trig`] of one arc, keyed by the bits of s (the segment's event
+/// location evaluates the arcs at the window ends again and again, and the end state at
+/// the located root): a hit returns the very values `trig` returned.
+#[derive(Debug, Clone, Copy)]
+pub struct TrigMemo {
+    keys: [u64; 4],
+    vals: [[f64; 3]; 4],
+    next: usize,
+}
+
+impl TrigMemo {
+    /// No entry (the key bits are a NaN, and NaN arguments are never looked up).
+    pub const EMPTY: TrigMemo = TrigMemo {
+        keys: [u64::MAX; 4],
+        vals: [[0.0; 3]; 4],
+        next: 0,
+    };
+
+    /// [`Arc::trig`] of `a` at s, from the memo if s was evaluated (for this arc) recently.
+    #[inline]
+    pub fn get(&mut self, a: &Arc, s: f64) -> [f64; 3] {
+        let k = s.to_bits();
+        if !s.is_nan() {
+            for i in 0..4 {
+                if self.keys[i] == k {
+                    return self.vals[i];
+                }
+            }
+        }
+        let t = a.trig(s);
+        self.put(s, t);
+        t
+    }
+
+    /// Records `t` = [`Arc::trig`] at s.
+    #[inline]
+    pub fn put(&mut self, s: f64, t: [f64; 3]) {
+        let i = self.next;
+        self.keys[i] = s.to_bits();
+        self.vals[i] = t;
+        self.next = (i + 1) & 3;
+    }
+}
+
 /// The exact free-plus-linear-load solution of one mode over one segment (see module docs).
 #[derive(Debug, Clone, Copy)]
 pub struct Arc {

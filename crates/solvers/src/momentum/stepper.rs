@@ -17,7 +17,7 @@ use structure::Scene;
 use super::energy::EnergyAccount;
 use super::events::Locator;
 pub use super::impact::ImpactDiagnostics;
-use super::modal::Arc;
+use super::modal::{Arc, TrigMemo};
 use super::peaks;
 pub use super::problem::{Problem, MAX_SUB, SIMULTANEOUS};
 use crate::overlap::OverlapTracker;
@@ -100,6 +100,8 @@ pub struct Stepper<'a> {
     /// [`Arc::trig`] of every arc at the segment end τ (shared by the end state and the
     /// damping integral).
     pub(super) trig_end: Vec<[f64; 3]>,
+    /// Per arc: memo of [`Arc::trig`] (cleared when the arcs are rebuilt).
+    pub(super) memo: Vec<TrigMemo>,
     /// Floor displacements and velocities at the current and at the previous sample, per
     /// building. These four
     /// buffers hold a leading zero (the ground) before the padded floors: floor i is at
@@ -255,6 +257,7 @@ impl<'a> Stepper<'a> {
                 .collect(),
             arcs: Vec::with_capacity(nm),
             trig_end: vec![[0.0; 3]; nm],
+            memo: vec![TrigMemo::EMPTY; nm],
             ud: p
                 .modal
                 .buildings
@@ -674,6 +677,7 @@ impl<'a> Stepper<'a> {
                         tol: 0.0,
                         shift: 0.0,
                         iterations: 0,
+                        memo: &mut self.memo,
                     };
                     if !loc.surely_open(prev.0, prev.1, cur.0, cur.1) {
                         return Ok(None);
@@ -709,6 +713,7 @@ impl<'a> Stepper<'a> {
     pub(super) fn build_arcs(&mut self, a0: f64, a1: f64, tau: f64, fc: Option<&[f64]>) {
         let m = &self.p.modal;
         self.arcs.clear();
+        self.memo.fill(TrigMemo::EMPTY);
         for n in 0..m.len() {
             let extra = fc.map_or(0.0, |f| f[n]);
             let (f0, f1) = (-m.gamma[n] * a0 + extra, -m.gamma[n] * a1 + extra);
@@ -721,6 +726,17 @@ impl<'a> Stepper<'a> {
                 f1,
                 tau,
             ));
+        }
+    }
+
+    /// The state at the end τ of the arcs' segment into `xn`, `vn` (and `trig_end`).
+    fn end_state(&mut self, tau: f64) {
+        for n in 0..self.arcs.len() {
+            let t = self.memo[n].get(&self.arcs[n], tau);
+            let (x1, v1) = self.arcs[n].xv_from(tau, t);
+            self.xn[n] = x1;
+            self.vn[n] = v1;
+            self.trig_end[n] = t;
         }
     }
 
@@ -738,13 +754,9 @@ impl<'a> Stepper<'a> {
         let (a0, a1) = (p.ground(j, self.s.t), p.ground(j, t_end));
         self.begin_interval(a0, a1, tau, fc);
         self.build_arcs(a0, a1, tau, fc);
-        for n in 0..self.arcs.len() {
-            let t = self.arcs[n].trig(tau);
-            let (x1, v1) = self.arcs[n].xv_from(tau, t);
-            self.xn[n] = x1;
-            self.vn[n] = v1;
-            self.trig_end[n] = t;
-        }
+        // The state at τ (xn, vn), computed when first needed: a closure located in an
+        // earlier window does not need it.
+        let mut end_ready = false;
         let tol = 2.0 * f64::EPSILON * (self.s.t + tau) + 1e-300;
         let mut first: Option<f64> = None;
         let mut found: Vec<(usize, f64)> = vec![];
@@ -754,11 +766,11 @@ impl<'a> Stepper<'a> {
             }
             // Windows of at most h/sub: at most one extremum of δ each.
             let m = ((tau / (p.h / p.sub as f64)) - 1e-9).ceil().max(1.0) as usize;
-            let at = |s: f64, arcs: &[Arc]| {
+            let at = |s: f64, arcs: &[Arc], memo: &mut [TrigMemo]| {
                 let (mut d, mut dd) = (-ct.gap, 0.0);
-                for (g, a) in ct.g.iter().zip(arcs) {
+                for ((g, a), mm) in ct.g.iter().zip(arcs).zip(memo.iter_mut()) {
                     if *g != 0.0 {
-                        let (x, v) = a.xv(s);
+                        let (x, v) = a.xv_from(s, mm.get(a, s));
                         d += g * x;
                         dd += g * v;
                     }
@@ -781,9 +793,13 @@ impl<'a> Stepper<'a> {
                     },
                 );
                 let cur = if w == m {
+                    if !end_ready {
+                        self.end_state(tau);
+                        end_ready = true;
+                    }
                     (ct.delta(&self.xn) - shift, ct.dot(&self.vn))
                 } else {
-                    let (d, dd) = at(hi, &self.arcs);
+                    let (d, dd) = at(hi, &self.arcs, &mut self.memo);
                     (d - shift, dd)
                 };
                 let mut loc = Locator {
@@ -795,6 +811,7 @@ impl<'a> Stepper<'a> {
                     tol,
                     shift,
                     iterations: 0,
+                    memo: &mut self.memo,
                 };
                 r = loc.locate(prev.0, prev.1, cur.0, cur.1);
                 self.stats.root_iterations += loc.iterations;
@@ -826,13 +843,16 @@ impl<'a> Stepper<'a> {
             }
         };
         // Commit [0, s_end] with its energy.
+        if s_end == tau && !end_ready {
+            self.end_state(tau);
+        }
         let m = &p.modal;
         for n in 0..self.arcs.len() {
             let a = self.arcs[n];
             let (x1, v1, t) = if s_end == tau {
                 (self.xn[n], self.vn[n], self.trig_end[n])
             } else {
-                let t = a.trig(s_end);
+                let t = self.memo[n].get(&a, s_end);
                 let (x1, v1) = a.xv_from(s_end, t);
                 (x1, v1, t)
             };
