@@ -92,6 +92,7 @@ pub struct Stepper<'a> {
     /// Per-mode energy sums of the fast path (input, damping), J; folded in by `finish`.
     pub(super) win_acc: Vec<f64>,
     pub(super) dmp_acc: Vec<f64>,
+    /// The sums including the step being tried (exchanged with the sums on acceptance).
     pub(super) win_step: Vec<f64>,
     pub(super) dmp_step: Vec<f64>,
     pub(super) shear_max: Vec<Vec<f64>>,
@@ -587,7 +588,10 @@ impl<'a> Stepper<'a> {
             let n4 = nm / 4 * 4;
             let (x, v) = (&self.s.x[..nm], &self.s.v[..nm]);
             let (xn, vn) = (&mut self.xn[..nm], &mut self.vn[..nm]);
+            // The energy sums with this step's energies go to the spare buffers (exchanged
+            // with the sums if the step is accepted).
             let (win, dmp) = (&mut self.win_step[..nm], &mut self.dmp_step[..nm]);
+            let (wacc, dacc) = (&self.win_acc[..nm], &self.dmp_acc[..nm]);
             for (k, blk) in c.blocks.iter().enumerate() {
                 let r = 4 * k..4 * k + 4;
                 let out = super::modal::propagate::<4>(
@@ -600,18 +604,31 @@ impl<'a> Stepper<'a> {
                 );
                 xn[r.clone()].copy_from_slice(&out[0]);
                 vn[r.clone()].copy_from_slice(&out[1]);
-                win[r.clone()].copy_from_slice(&out[2]);
-                dmp[r].copy_from_slice(&out[3]);
+                // (All loads before the stores: the buffers are not known to be distinct.)
+                let (wa, da): ([f64; 4], [f64; 4]) = (
+                    wacc[r.clone()].try_into().unwrap(),
+                    dacc[r.clone()].try_into().unwrap(),
+                );
+                let wsum: [f64; 4] = std::array::from_fn(|i| wa[i] + out[2][i]);
+                let dsum: [f64; 4] = std::array::from_fn(|i| da[i] + out[3][i]);
+                win[r.clone()].copy_from_slice(&wsum);
+                dmp[r].copy_from_slice(&dsum);
             }
             if let Some(tail) = &c.tail {
-                let (mut xt, mut vt) = ([0.0; 4], [0.0; 4]);
-                xt[..nm - n4].copy_from_slice(&x[n4..]);
-                vt[..nm - n4].copy_from_slice(&v[n4..]);
+                // Lane by lane (variable-length slice copies would be library calls).
+                let t = nm - n4;
+                let lane = |s: &[f64], i: usize| if i < t { s[n4 + i] } else { 0.0 };
+                let xt: [f64; 4] = std::array::from_fn(|i| lane(x, i));
+                let vt: [f64; 4] = std::array::from_fn(|i| lane(v, i));
                 let out = super::modal::propagate::<4>(tail, xt, vt, a0, a1, h);
-                xn[n4..].copy_from_slice(&out[0][..nm - n4]);
-                vn[n4..].copy_from_slice(&out[1][..nm - n4]);
-                win[n4..].copy_from_slice(&out[2][..nm - n4]);
-                dmp[n4..].copy_from_slice(&out[3][..nm - n4]);
+                for i in 0..4 {
+                    if i < t {
+                        xn[n4 + i] = out[0][i];
+                        vn[n4 + i] = out[1][i];
+                        win[n4 + i] = wacc[n4 + i] + out[2][i];
+                        dmp[n4 + i] = dacc[n4 + i] + out[3][i];
+                    }
+                }
             }
         }
         // Rigorous skip of far contacts: d√(2E)/dt ≤ |f| (modal load norm), so over the step
@@ -695,12 +712,8 @@ impl<'a> Stepper<'a> {
         let iv = &mut self.interval;
         (iv.a0, iv.a1, iv.tau, iv.fc) = (a0, a1, h, None);
         // Energy of the accepted step only (a step with a possible event is discarded).
-        for (acc, w) in self.win_acc.iter_mut().zip(&self.win_step) {
-            *acc += w;
-        }
-        for (acc, d) in self.dmp_acc.iter_mut().zip(&self.dmp_step) {
-            *acc += d;
-        }
+        std::mem::swap(&mut self.win_acc, &mut self.win_step);
+        std::mem::swap(&mut self.dmp_acc, &mut self.dmp_step);
         self.finish_grid(j, t_end);
         self.count_step(h)?;
         self.interval.tau_done = h;
