@@ -479,8 +479,13 @@ impl Arc {
     /// The transcendental part of an evaluation at s: [e^{−ζωs}, sin ω_d s, cos ω_d s].
     #[inline]
     pub fn trig(&self, s: f64) -> [f64; 3] {
-        let e = (-self.c * s).exp();
-        let (sn, cs) = (self.d * s).sin_cos();
+        let (p, q) = (-self.c * s, self.d * s);
+        if p == 0.0 && q == 0.0 {
+            // exp(±0) = 1, sin(±0) = ±0, cos(±0) = 1 exactly (what libm returns).
+            return [1.0, q, 1.0];
+        }
+        let e = p.exp();
+        let (sn, cs) = q.sin_cos();
         [e, sn, cs]
     }
 
