@@ -474,12 +474,24 @@ impl<'a> Stepper<'a> {
             .collect()
     }
 
+    #[inline(always)]
     pub(super) fn count_step(&mut self, tau: f64) -> Result<(), SolverError> {
         self.stats.steps += 1;
         if tau > 0.0 {
             self.stats.min_step = self.stats.min_step.min(tau);
             self.stats.max_step = self.stats.max_step.max(tau);
         }
+        // Checked every 64 segments (and at the end): a non-finite mode stays non-finite.
+        if self.stats.steps > self.p.limits.max_steps || self.stats.steps % 64 == 0 {
+            return self.count_step_checks();
+        }
+        Ok(())
+    }
+
+    /// The rare part of [`Stepper::count_step`]: the step budget and the finiteness check.
+    #[cold]
+    #[inline(never)]
+    fn count_step_checks(&self) -> Result<(), SolverError> {
         if self.stats.steps > self.p.limits.max_steps {
             return Err(SolverError::StepBudget {
                 time: self.s.t,
@@ -487,7 +499,6 @@ impl<'a> Stepper<'a> {
                 limit: self.p.limits.max_steps,
             });
         }
-        // Checked every 64 segments (and at the end): a non-finite mode stays non-finite.
         if self.stats.steps % 64 == 0 && !self.state_is_finite() {
             return Err(SolverError::NonFinite {
                 time: self.s.t,
