@@ -413,6 +413,12 @@ impl TrigMemo {
         t
     }
 
+    /// Forgets every entry.
+    #[inline]
+    pub fn clear(&mut self) {
+        self.keys = [u64::MAX; 4];
+    }
+
     /// Records `t` = [`Arc::trig`] at s.
     #[inline]
     pub fn put(&mut self, s: f64, t: [f64; 3]) {

@@ -737,7 +737,7 @@ impl<'a> Stepper<'a> {
     pub(super) fn build_arcs(&mut self, a0: f64, a1: f64, tau: f64, fc: Option<&[f64]>) {
         let m = &self.p.modal;
         self.arcs.clear();
-        self.memo.fill(TrigMemo::EMPTY);
+        self.memo.iter_mut().for_each(TrigMemo::clear);
         for n in 0..m.len() {
             let extra = fc.map_or(0.0, |f| f[n]);
             let (f0, f1) = (-m.gamma[n] * a0 + extra, -m.gamma[n] * a1 + extra);
