@@ -245,9 +245,13 @@ pub struct StepCoeffs {
     pub dq: [Vec<f64>; 10],
     /// The same coefficients interleaved by chunks of 4 modes (the fast-step kernel
     /// [`propagate`]), the modes past the last full chunk in a last chunk padded with zero
-    /// coefficients (its padding lanes compute zeros and are never read).
+    /// coefficients (its padding lanes compute zeros and are never read; used with fewer
+    /// than 4 modes, else `last`).
     pub blocks: Vec<StepBlock<4>>,
     pub tail: Option<StepBlock<4>>,
+    /// With at least 4 modes and a remainder: the last 4 modes as a full chunk (it overlaps
+    /// the last full chunk; the overlapping modes compute the same values again).
+    pub last: Option<StepBlock<4>>,
 }
 
 /// Step coefficients of W consecutive modes, field by field (see [`StepCoeffs`]): a00 a01
@@ -330,6 +334,7 @@ impl StepCoeffs {
             dq: Default::default(),
             blocks: Vec::new(),
             tail: None,
+            last: None,
         };
         for q in c.dq.iter_mut() {
             *q = vec![0.0; nm];
@@ -375,6 +380,7 @@ impl StepCoeffs {
             .map(|k| StepBlock::gather(&c, &modal.gamma, 4 * k, 4))
             .collect();
         c.tail = (n4 < nm).then(|| StepBlock::gather(&c, &modal.gamma, n4, nm - n4));
+        c.last = (n4 < nm && nm >= 4).then(|| StepBlock::gather(&c, &modal.gamma, nm - 4, 4));
         c
     }
 }

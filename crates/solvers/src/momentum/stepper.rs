@@ -169,6 +169,40 @@ pub struct Stepper<'a> {
     pub(super) overlap_stale: bool,
 }
 
+/// One chunk of 4 modes `r` of the fast step: the new state into (xn, vn), the energy sums
+/// plus this step's energies into (win, dmp).
+#[inline(always)]
+#[allow(clippy::type_complexity)]
+fn propagate_chunk(
+    blk: &super::modal::StepBlock<4>,
+    r: std::ops::Range<usize>,
+    (x, v): (&[f64], &[f64]),
+    (xn, vn): (&mut [f64], &mut [f64]),
+    (wacc, dacc): (&[f64], &[f64]),
+    (win, dmp): (&mut [f64], &mut [f64]),
+    (a0, a1, h): (f64, f64, f64),
+) {
+    let out = super::modal::propagate::<4>(
+        blk,
+        x[r.clone()].try_into().unwrap(),
+        v[r.clone()].try_into().unwrap(),
+        a0,
+        a1,
+        h,
+    );
+    xn[r.clone()].copy_from_slice(&out[0]);
+    vn[r.clone()].copy_from_slice(&out[1]);
+    // (All loads before the stores: the buffers are not known to be distinct.)
+    let (wa, da): ([f64; 4], [f64; 4]) = (
+        wacc[r.clone()].try_into().unwrap(),
+        dacc[r.clone()].try_into().unwrap(),
+    );
+    let wsum: [f64; 4] = std::array::from_fn(|i| wa[i] + out[2][i]);
+    let dsum: [f64; 4] = std::array::from_fn(|i| da[i] + out[3][i]);
+    win[r.clone()].copy_from_slice(&wsum);
+    dmp[r].copy_from_slice(&dsum);
+}
+
 /// Pairs `k0 .. k0 + n` of the overlap audit: floors `i0 + t` of building `left` against
 /// `j0 + t` of building `right`, t < n.
 #[derive(Debug, Clone, Copy)]
@@ -605,27 +639,29 @@ impl<'a> Stepper<'a> {
             let (wacc, dacc) = (&self.win_acc[..nm], &self.dmp_acc[..nm]);
             for (k, blk) in c.blocks.iter().enumerate() {
                 let r = 4 * k..4 * k + 4;
-                let out = super::modal::propagate::<4>(
+                propagate_chunk(
                     blk,
-                    x[r.clone()].try_into().unwrap(),
-                    v[r.clone()].try_into().unwrap(),
-                    a0,
-                    a1,
-                    h,
+                    r,
+                    (x, v),
+                    (xn, vn),
+                    (wacc, dacc),
+                    (win, dmp),
+                    (a0, a1, h),
                 );
-                xn[r.clone()].copy_from_slice(&out[0]);
-                vn[r.clone()].copy_from_slice(&out[1]);
-                // (All loads before the stores: the buffers are not known to be distinct.)
-                let (wa, da): ([f64; 4], [f64; 4]) = (
-                    wacc[r.clone()].try_into().unwrap(),
-                    dacc[r.clone()].try_into().unwrap(),
-                );
-                let wsum: [f64; 4] = std::array::from_fn(|i| wa[i] + out[2][i]);
-                let dsum: [f64; 4] = std::array::from_fn(|i| da[i] + out[3][i]);
-                win[r.clone()].copy_from_slice(&wsum);
-                dmp[r].copy_from_slice(&dsum);
             }
-            if let Some(tail) = &c.tail {
+            if let Some(last) = &c.last {
+                // The remainder as the last 4 modes (the first of them again: same values).
+                let r = nm - 4..nm;
+                propagate_chunk(
+                    last,
+                    r,
+                    (x, v),
+                    (xn, vn),
+                    (wacc, dacc),
+                    (win, dmp),
+                    (a0, a1, h),
+                );
+            } else if let Some(tail) = &c.tail {
                 // Lane by lane (variable-length slice copies would be library calls).
                 let t = nm - n4;
                 let lane = |s: &[f64], i: usize| if i < t { s[n4 + i] } else { 0.0 };
