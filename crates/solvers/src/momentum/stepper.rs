@@ -95,6 +95,9 @@ pub struct Stepper<'a> {
     /// The sums including the step being tried (exchanged with the sums on acceptance).
     pub(super) win_step: Vec<f64>,
     pub(super) dmp_step: Vec<f64>,
+    /// Scratch of the fast step's interior checks: per mode the δ and δ̇ terms (before g).
+    pub(super) check_d: Vec<f64>,
+    pub(super) check_dd: Vec<f64>,
     pub(super) shear_max: Vec<Vec<f64>>,
     pub(super) stiffness: Vec<Vec<f64>>,
     pub(super) arcs: Vec<Arc>,
@@ -262,6 +265,8 @@ impl<'a> Stepper<'a> {
             dmp_acc: vec![0.0; nm],
             win_step: vec![0.0; nm],
             dmp_step: vec![0.0; nm],
+            check_d: vec![0.0; nm],
+            check_dd: vec![0.0; nm],
             disp_max: p
                 .modal
                 .buildings
@@ -708,6 +713,37 @@ impl<'a> Stepper<'a> {
             for w in 1..=sub {
                 let cur = if w == sub {
                     (ct.delta(&self.xn), ct.dot(&self.vn))
+                } else if !p.check_starts.is_empty() {
+                    // The per-mode terms by chunks of 4 (the same expressions), then the
+                    // sums in mode order.
+                    let r = w as f64 / sub as f64;
+                    let fr = a0 + r * (a1 - a0);
+                    let nm = self.s.x.len();
+                    let (x, v) = (&self.s.x[..nm], &self.s.v[..nm]);
+                    let (td, tdd) = (&mut self.check_d[..nm], &mut self.check_dd[..nm]);
+                    for (k, &n0) in p.check_blocks[w - 1].iter().zip(&p.check_starts) {
+                        let rr = n0..n0 + 4;
+                        let x0: [f64; 4] = x[rr.clone()].try_into().unwrap();
+                        let v0: [f64; 4] = v[rr.clone()].try_into().unwrap();
+                        let mut a = [0.0; 4];
+                        let mut b = [0.0; 4];
+                        for i in 0..4 {
+                            let gam = k[8][i];
+                            let (f0, f1) = (-gam * a0, -gam * fr);
+                            a[i] = k[0][i] * x0[i] + k[1][i] * v0[i] + k[2][i] * f0 + k[3][i] * f1;
+                            b[i] = k[4][i] * x0[i] + k[5][i] * v0[i] + k[6][i] * f0 + k[7][i] * f1;
+                        }
+                        td[rr.clone()].copy_from_slice(&a);
+                        tdd[rr].copy_from_slice(&b);
+                    }
+                    let (mut d, mut dd) = (-ct.gap, 0.0);
+                    for ((g, t), tt) in ct.g.iter().zip(&*td).zip(&*tdd) {
+                        if *g != 0.0 {
+                            d += g * t;
+                            dd += g * tt;
+                        }
+                    }
+                    (d, dd)
                 } else {
                     let r = w as f64 / sub as f64;
                     let (mut d, mut dd) = (-ct.gap, 0.0);
