@@ -358,7 +358,12 @@ impl StepCoeffs {
                 e[i] = 1.0;
                 e
             };
-            let i_of = |e: [f64; 4]| Arc::new(w, z, e[0], e[1], e[2], e[3], h).damping_integral(h);
+            // The exponential integrals are the mode's, whatever the arc.
+            let a0 = Arc::new(w, z, 0.0, 0.0, 0.0, 0.0, h);
+            let kern = a0.damping_kernels(h, a0.trig(h));
+            let i_of = |e: [f64; 4]| {
+                Arc::new(w, z, e[0], e[1], e[2], e[3], h).damping_integral_with(h, &kern)
+            };
             let diag: Vec<f64> = (0..4).map(|i| i_of(unit(i))).collect();
             let mut k = 0;
             for i in 0..4 {
@@ -383,6 +388,17 @@ impl StepCoeffs {
         c.last = (n4 < nm && nm >= 4).then(|| StepBlock::gather(&c, &modal.gamma, nm - 4, 4));
         c
     }
+}
+
+/// The exponential integrals of one mode's damping integral over [0, s]
+/// ([`Arc::damping_kernels`]).
+#[derive(Debug, Clone, Copy)]
+pub struct DampingKernels {
+    e1c: f64,
+    e1s: f64,
+    e2c: f64,
+    e2s: f64,
+    xm: f64,
 }
 
 /// A small memo of [`Arc::trig`] of one arc, keyed by the bits of s (the segment's event
@@ -545,10 +561,29 @@ impl Arc {
     /// [`Arc::damping_integral`] given [`Arc::trig`] at s (e^{−ζωs}, sin ω_d s, cos ω_d s
     /// are the values of its first exponential integral).
     #[inline]
-    pub fn damping_integral_from(&self, s: f64, [e1, sn1, cs1]: [f64; 3]) -> f64 {
+    pub fn damping_integral_from(&self, s: f64, t: [f64; 3]) -> f64 {
+        self.damping_integral_with(s, &self.damping_kernels(s, t))
+    }
+
+    /// [`Arc::damping_integral`] from its exponential integrals ([`Arc::damping_kernels`],
+    /// which depend on the mode and s only).
+    #[inline]
+    pub fn damping_integral_with(&self, s: f64, k: &DampingKernels) -> f64 {
         let (c, d) = (self.c, self.d);
         let cc = self.b * d - c * self.a;
         let dd = -(self.a * d + c * self.b);
+        let j1 = cc * k.e1c + dd * k.e1s;
+        let j2 =
+            0.5 * (cc * cc + dd * dd) * k.xm + 0.5 * (cc * cc - dd * dd) * k.e2c + cc * dd * k.e2s;
+        self.beta * self.beta * s + 2.0 * self.beta * j1 + j2
+    }
+
+    /// The exponential integrals of [`Arc::damping_integral`] over [0, s] given
+    /// [`Arc::trig`] at s: ∫ e^{ps} cos qs, ∫ e^{ps} sin qs for (p, q) = (−ζω, ω_d) and
+    /// (−2ζω, 2ω_d), and ∫ e^{−2ζωσ} dσ.
+    #[inline]
+    pub fn damping_kernels(&self, s: f64, [e1, sn1, cs1]: [f64; 3]) -> DampingKernels {
+        let (c, d) = (self.c, self.d);
         // ∫ e^{ps} cos qs, ∫ e^{ps} sin qs over [0, s]
         let fin = |p: f64, q: f64, e: f64, sn: f64, cs: f64| -> (f64, f64) {
             let den = p * p + q * q;
@@ -565,11 +600,13 @@ impl Arc {
         let x = |p: f64| if p == 0.0 { s } else { (p * s).exp_m1() / p };
         let (e1c, e1s) = fin(-c, d, e1, sn1, cs1);
         let (e2c, e2s) = ecs(-2.0 * c, 2.0 * d);
-        let j1 = cc * e1c + dd * e1s;
-        let j2 = 0.5 * (cc * cc + dd * dd) * x(-2.0 * c)
-            + 0.5 * (cc * cc - dd * dd) * e2c
-            + cc * dd * e2s;
-        self.beta * self.beta * s + 2.0 * self.beta * j1 + j2
+        DampingKernels {
+            e1c,
+            e1s,
+            e2c,
+            e2s,
+            xm: x(-2.0 * c),
+        }
     }
 
     /// Work of the load ∫₀ˢ f q̇ dσ given the end state (x1, v1) = (q(s), q̇(s)), exact.
