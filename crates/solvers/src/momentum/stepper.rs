@@ -95,6 +95,8 @@ pub struct Stepper<'a> {
     /// The sums including the step being tried (exchanged with the sums on acceptance).
     pub(super) win_step: Vec<f64>,
     pub(super) dmp_step: Vec<f64>,
+    /// The fast path found that base step j needs the closed form (state unchanged since).
+    pub(super) fast_rejected: Option<usize>,
     /// Scratch of the fast step's interior checks: per mode the δ and δ̇ terms (before g).
     pub(super) check_d: Vec<f64>,
     pub(super) check_dd: Vec<f64>,
@@ -265,6 +267,7 @@ impl<'a> Stepper<'a> {
             dmp_acc: vec![0.0; nm],
             win_step: vec![0.0; nm],
             dmp_step: vec![0.0; nm],
+            fast_rejected: None,
             check_d: vec![0.0; nm],
             check_dd: vec![0.0; nm],
             disp_max: p
@@ -589,11 +592,36 @@ impl<'a> Stepper<'a> {
             return self.persistent_segment(tau, t_end);
         }
         if self.s.on_grid && (tau - p.h).abs() <= 1e-9 * p.h {
-            if let Some(step) = self.fast_step(j, t_end)? {
-                return Ok(step);
+            // (A step the fast path already tried from this very state is not tried again.)
+            if std::mem::take(&mut self.fast_rejected) != Some(j) {
+                if let Some(step) = self.fast_step(j, t_end)? {
+                    return Ok(step);
+                }
             }
         }
         self.segment(tau, t_end, None, true)
+    }
+
+    /// The next step if [`Stepper::advance`] would take it on the fast path (the same tests
+    /// in the same order): its index and end time.
+    #[inline(always)]
+    fn next_fast(&self) -> Option<(usize, f64)> {
+        let p = self.p;
+        let end_tol = 1e-12 * p.h;
+        if self.s.t >= p.duration - end_tol {
+            return None;
+        }
+        let j = self.s.j;
+        let t_end = if j + 1 >= p.n_steps {
+            p.duration
+        } else {
+            p.grid(j + 1)
+        };
+        let tau = t_end - self.s.t;
+        if tau <= end_tol.max(1e-15 * self.s.t) || !self.s.persistent.is_empty() {
+            return None;
+        }
+        (self.s.on_grid && (tau - p.h).abs() <= 1e-9 * p.h).then_some((j, t_end))
     }
 
     pub(super) fn finish_grid(&mut self, j: usize, t_end: f64) {
@@ -618,7 +646,29 @@ impl<'a> Stepper<'a> {
             type Output = Result<Option<Step>, SolverError>;
             #[inline(always)]
             fn with_simd<S: pulp::Simd>(self, _: S) -> Self::Output {
-                self.st.fast_step_body(self.j, self.t_end)
+                // Consecutive fast steps in one dispatch: after an accepted step, the next
+                // one too if `advance` would take it on the fast path (the caller does
+                // nothing between `Reached` steps). A step found to need the closed form
+                // after some were accepted ends the run as `Reached` with the state at its
+                // start, remembered so that `advance` goes to the closed form at once.
+                let (mut j, mut t_end) = (self.j, self.t_end);
+                let mut accepted = false;
+                loop {
+                    match self.st.fast_step_body(j, t_end)? {
+                        None if accepted => {
+                            self.st.fast_rejected = Some(j);
+                            return Ok(Some(Step::Reached));
+                        }
+                        None => return Ok(None),
+                        Some(step) => match self.st.next_fast() {
+                            Some(next) => {
+                                accepted = true;
+                                (j, t_end) = next;
+                            }
+                            None => return Ok(Some(step)),
+                        },
+                    }
+                }
             }
         }
         let arch = self.arch;
