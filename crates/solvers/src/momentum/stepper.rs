@@ -95,6 +95,8 @@ pub struct Stepper<'a> {
     /// The sums including the step being tried (exchanged with the sums on acceptance).
     pub(super) win_step: Vec<f64>,
     pub(super) dmp_step: Vec<f64>,
+    /// Per mode q̇² + ω² q² at the start of the fast step (the terms of 2E).
+    pub(super) e_terms: Vec<f64>,
     /// The fast path found that base step j needs the closed form (state unchanged since).
     pub(super) fast_rejected: Option<usize>,
     /// Scratch of the fast step's interior checks: per mode the δ and δ̇ terms (before g).
@@ -174,10 +176,30 @@ pub struct Stepper<'a> {
     pub(super) overlap_stale: bool,
 }
 
+/// Σ t as [`super::observe::twice_energy`] sums its terms: four lane sums over chunks of
+/// 4 from the start, the remainder into lane 0, then (l₀ + l₁) + (l₂ + l₃).
+#[inline(always)]
+fn lane_sum(t: &[f64]) -> f64 {
+    let n = t.len();
+    let n4 = n / 4 * 4;
+    let mut acc = [0.0f64; 4];
+    let mut i = 0;
+    while i < n4 {
+        let c: [f64; 4] = t[i..i + 4].try_into().unwrap();
+        acc = std::array::from_fn(|k| acc[k] + c[k]);
+        i += 4;
+    }
+    let mut l0 = acc[0];
+    for &tk in &t[n4..] {
+        l0 += tk;
+    }
+    (l0 + acc[1]) + (acc[2] + acc[3])
+}
+
 /// One chunk of 4 modes `r` of the fast step: the new state into (xn, vn), the energy sums
 /// plus this step's energies into (win, dmp).
 #[inline(always)]
-#[allow(clippy::type_complexity)]
+#[allow(clippy::type_complexity, clippy::too_many_arguments)]
 fn propagate_chunk(
     blk: &super::modal::StepBlock<4>,
     r: std::ops::Range<usize>,
@@ -186,15 +208,17 @@ fn propagate_chunk(
     (wacc, dacc): (&[f64], &[f64]),
     (win, dmp): (&mut [f64], &mut [f64]),
     (a0, a1, h): (f64, f64, f64),
+    (w2, et): (&[f64], &mut [f64]),
 ) {
-    let out = super::modal::propagate::<4>(
-        blk,
+    let (xc, vc, wc): ([f64; 4], [f64; 4], [f64; 4]) = (
         x[r.clone()].try_into().unwrap(),
         v[r.clone()].try_into().unwrap(),
-        a0,
-        a1,
-        h,
+        w2[r.clone()].try_into().unwrap(),
     );
+    // The terms of 2E at the start (as `observe::twice_energy`).
+    let terms: [f64; 4] = std::array::from_fn(|i| vc[i] * vc[i] + wc[i] * xc[i] * xc[i]);
+    et[r.clone()].copy_from_slice(&terms);
+    let out = super::modal::propagate::<4>(blk, xc, vc, a0, a1, h);
     xn[r.clone()].copy_from_slice(&out[0]);
     vn[r.clone()].copy_from_slice(&out[1]);
     // (All loads before the stores: the buffers are not known to be distinct.)
@@ -267,6 +291,7 @@ impl<'a> Stepper<'a> {
             dmp_acc: vec![0.0; nm],
             win_step: vec![0.0; nm],
             dmp_step: vec![0.0; nm],
+            e_terms: vec![0.0; nm],
             fast_rejected: None,
             check_d: vec![0.0; nm],
             check_dd: vec![0.0; nm],
@@ -692,6 +717,7 @@ impl<'a> Stepper<'a> {
             // with the sums if the step is accepted).
             let (win, dmp) = (&mut self.win_step[..nm], &mut self.dmp_step[..nm]);
             let (wacc, dacc) = (&self.win_acc[..nm], &self.dmp_acc[..nm]);
+            let (w2, et) = (&p.omega2[..nm], &mut self.e_terms[..nm]);
             for (k, blk) in c.blocks.iter().enumerate() {
                 let r = 4 * k..4 * k + 4;
                 propagate_chunk(
@@ -702,6 +728,7 @@ impl<'a> Stepper<'a> {
                     (wacc, dacc),
                     (win, dmp),
                     (a0, a1, h),
+                    (w2, &mut *et),
                 );
             }
             if let Some(last) = &c.last {
@@ -715,6 +742,7 @@ impl<'a> Stepper<'a> {
                     (wacc, dacc),
                     (win, dmp),
                     (a0, a1, h),
+                    (w2, &mut *et),
                 );
             } else if let Some(tail) = &c.tail {
                 // Lane by lane (variable-length slice copies would be library calls).
@@ -725,6 +753,8 @@ impl<'a> Stepper<'a> {
                 let out = super::modal::propagate::<4>(tail, xt, vt, a0, a1, h);
                 for i in 0..4 {
                     if i < t {
+                        let n = n4 + i;
+                        et[n] = v[n] * v[n] + w2[n] * x[n] * x[n];
                         xn[n4 + i] = out[0][i];
                         vn[n4 + i] = out[1][i];
                         win[n4 + i] = wacc[n4 + i] + out[2][i];
@@ -740,7 +770,8 @@ impl<'a> Stepper<'a> {
         // energy envelope of this interval), and their sum for the contact bound.
         let mut e2 = 0.0;
         for (b, bm) in p.modal.buildings.iter().enumerate() {
-            let e = super::observe::twice_energy(&self.s.x, &self.s.v, &p.omega2, bm.range.clone());
+            // (= observe::twice_energy: the same terms, summed alike)
+            let e = lane_sum(&self.e_terms[bm.range.clone()]);
             self.env_e2[b] = e;
             e2 += e;
         }
