@@ -95,6 +95,8 @@ pub struct Stepper<'a> {
     /// The sums including the step being tried (exchanged with the sums on acceptance).
     pub(super) win_step: Vec<f64>,
     pub(super) dmp_step: Vec<f64>,
+    /// g·x of the first contact at the fast step's start, summed as `delta_fast` does.
+    pub(super) delta0: f64,
     /// Per mode q̇² + ω² q² at the start of the fast step (the terms of 2E).
     pub(super) e_terms: Vec<f64>,
     /// The fast path found that base step j needs the closed form (state unchanged since).
@@ -291,6 +293,7 @@ impl<'a> Stepper<'a> {
             dmp_acc: vec![0.0; nm],
             win_step: vec![0.0; nm],
             dmp_step: vec![0.0; nm],
+            delta0: 0.0,
             e_terms: vec![0.0; nm],
             fast_rejected: None,
             check_d: vec![0.0; nm],
@@ -718,8 +721,18 @@ impl<'a> Stepper<'a> {
             let (win, dmp) = (&mut self.win_step[..nm], &mut self.dmp_step[..nm]);
             let (wacc, dacc) = (&self.win_acc[..nm], &self.dmp_acc[..nm]);
             let (w2, et) = (&p.omega2[..nm], &mut self.e_terms[..nm]);
+            // δ of the first contact at the start as `ContactGeom::delta_fast` sums it (four
+            // lane sums over the chunks, the remainder into lane 0), while x passes by (with
+            // no contact, a dummy sum).
+            let g0 = p.contacts.first().map_or(x, |ct| &ct.g[..nm]);
+            let mut gacc = [0.0f64; 4];
             for (k, blk) in c.blocks.iter().enumerate() {
                 let r = 4 * k..4 * k + 4;
+                let (gc, xc): ([f64; 4], [f64; 4]) = (
+                    g0[r.clone()].try_into().unwrap(),
+                    x[r.clone()].try_into().unwrap(),
+                );
+                gacc = std::array::from_fn(|i| gacc[i] + gc[i] * xc[i]);
                 propagate_chunk(
                     blk,
                     r,
@@ -731,6 +744,10 @@ impl<'a> Stepper<'a> {
                     (w2, &mut *et),
                 );
             }
+            for k in n4..nm {
+                gacc[0] += g0[k] * x[k];
+            }
+            self.delta0 = (gacc[0] + gacc[1]) + (gacc[2] + gacc[3]);
             if let Some(last) = &c.last {
                 // The remainder as the last 4 modes (the first of them again: same values).
                 let r = nm - 4..nm;
@@ -783,7 +800,12 @@ impl<'a> Stepper<'a> {
             // δ, δ̇ at the window ends 0, h/sub, …, h. The skip test uses the vectorised
             // sum: its round-off (≲ 30 ε |g|·|q|) is far inside the bound's relative margin
             // of 1e-9 (h·√W·vbound ≥ h ω_min |g|·|q|).
-            if ct.delta_fast(&self.s.x) < -h * p.sqrt_w[ci] * vbound * (1.0 + 1e-9) {
+            let df = if ci == 0 {
+                self.delta0 - ct.gap
+            } else {
+                ct.delta_fast(&self.s.x)
+            };
+            if df < -h * p.sqrt_w[ci] * vbound * (1.0 + 1e-9) {
                 continue;
             }
             let d_start = ct.delta(&self.s.x);
