@@ -12,10 +12,10 @@
 //! - δ₀ ≥ 0 (touching just after an impact or a release): δ̇₀ > 0 with δ₁ ≥ 0 is an
 //!   immediate (zero-speed) closure (with δ₁ < 0 a round-off overlap, ignored); otherwise the minimum is located first and the crossing after it.
 
-use roots::Convergency;
+use roots::{Convergency, SearchError};
 
 use super::impulse::ContactGeom;
-use super::modal::{Arc, Modal};
+use super::modal::{Arc, Modal, TrigMemo};
 
 /// Brent convergence: |Δs| below `tol`, exact zero, iteration count recorded.
 pub struct Conv {
@@ -36,6 +36,81 @@ impl Convergency<f64> for Conv {
     }
 }
 
+/// Brent's method exactly as `roots::find_root_brent` (the same points, the same
+/// arithmetic, the same convergence calls, hence the same result bit for bit), without its
+/// re-evaluations of f at the bracket end kept by each iteration: that end's value is
+/// already known (f is a pure function of s), so each iteration costs one evaluation of f
+/// instead of two.
+pub fn find_root_brent<Func>(
+    a: f64,
+    b: f64,
+    mut f: Func,
+    convergency: &mut dyn Convergency<f64>,
+) -> Result<f64, SearchError>
+where
+    Func: FnMut(f64) -> f64,
+{
+    #[inline(always)]
+    fn arrange(a: f64, ya: f64, b: f64, yb: f64) -> (f64, f64, f64, f64) {
+        if ya.abs() > yb.abs() {
+            (a, ya, b, yb)
+        } else {
+            (b, yb, a, ya)
+        }
+    }
+    let fa = f(a);
+    let fb = f(b);
+    let (mut a, mut ya, mut b, mut yb) = arrange(a, fa, b, fb);
+    if ya * yb > 0.0 {
+        return Err(SearchError::NoBracketing);
+    }
+    let (mut c, mut yc, mut d) = (a, ya, a);
+    let mut flag = true;
+    let mut iter = 0;
+    loop {
+        if convergency.is_root_found(ya) {
+            return Ok(a);
+        }
+        if convergency.is_root_found(yb) {
+            return Ok(b);
+        }
+        if convergency.is_converged(a, b) {
+            return Ok(c);
+        }
+        let mut s = if (ya != yc) && (yb != yc) {
+            a * yb * yc / ((ya - yb) * (ya - yc))
+                + b * ya * yc / ((yb - ya) * (yb - yc))
+                + c * ya * yb / ((yc - ya) * (yc - yb))
+        } else {
+            b - yb * (b - a) / (yb - ya)
+        };
+        let cond1 = (s - b) * (s - (3.0 * a + b) / 4.0) > 0.0;
+        let cond2 = flag && (s - b).abs() >= (b - c).abs() / 2.0;
+        let cond3 = !flag && (s - b).abs() >= (c - d).abs() / 2.0;
+        let cond4 = flag && convergency.is_converged(b, c);
+        let cond5 = !flag && convergency.is_converged(c, d);
+        if cond1 || cond2 || cond3 || cond4 || cond5 {
+            s = (a + b) / 2.0;
+            flag = true;
+        } else {
+            flag = false;
+        }
+        let ys = f(s);
+        d = c;
+        c = b;
+        yc = yb;
+        if ya * ys < 0.0 {
+            (a, ya, b, yb) = arrange(a, ya, s, ys);
+        } else {
+            (a, ya, b, yb) = arrange(s, ys, b, yb);
+        }
+        iter += 1;
+        if convergency.is_iteration_limit_reached(iter) {
+            return Err(SearchError::NoConvergency);
+        }
+    }
+}
+
 /// Closed-form evaluation of one contact over a segment.
 pub struct Locator<'a> {
     pub contact: &'a ContactGeom,
@@ -50,24 +125,38 @@ pub struct Locator<'a> {
     /// was resolved: see `Stepper`).
     pub shift: f64,
     pub iterations: u64,
+    /// Per arc: memo of its transcendental values (empty where no evaluation is needed).
+    pub memo: &'a mut [TrigMemo],
 }
 
 impl Locator<'_> {
-    fn delta(&self, s: f64) -> f64 {
+    fn delta(&mut self, s: f64) -> f64 {
         let mut d = 0.0;
-        for (g, a) in self.contact.g.iter().zip(self.arcs) {
+        for ((g, a), m) in self
+            .contact
+            .g
+            .iter()
+            .zip(self.arcs)
+            .zip(self.memo.iter_mut())
+        {
             if *g != 0.0 {
-                d += g * a.xv(s).0;
+                d += g * a.x_from(s, m.get(a, s));
             }
         }
         d - self.contact.gap - self.shift
     }
 
-    fn ddelta(&self, s: f64) -> f64 {
+    fn ddelta(&mut self, s: f64) -> f64 {
         let mut d = 0.0;
-        for (g, a) in self.contact.g.iter().zip(self.arcs) {
+        for ((g, a), m) in self
+            .contact
+            .g
+            .iter()
+            .zip(self.arcs)
+            .zip(self.memo.iter_mut())
+        {
             if *g != 0.0 {
-                d += g * a.xv(s).1;
+                d += g * a.v_from(m.get(a, s));
             }
         }
         d
@@ -79,16 +168,16 @@ impl Locator<'_> {
             iterations: 0,
         };
         let r = if derivative {
-            roots::find_root_brent(a, b, |s| self.ddelta(s), &mut conv)
+            find_root_brent(a, b, |s| self.ddelta(s), &mut conv)
         } else {
-            roots::find_root_brent(a, b, |s| self.delta(s), &mut conv)
+            find_root_brent(a, b, |s| self.delta(s), &mut conv)
         };
         self.iterations += conv.iterations as u64 + 1;
         match r {
             Ok(s) => s.clamp(a, b),
             // No bracket (round-off at an end): the end where the function is nearer zero.
             Err(_) => {
-                let f = |s: f64| {
+                let mut f = |s: f64| {
                     if derivative {
                         self.ddelta(s)
                     } else {

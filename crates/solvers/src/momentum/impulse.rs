@@ -70,9 +70,26 @@ impl ContactGeom {
         }
     }
 
+    /// g·q summed in mode order (as `iter().sum()`), the products by chunks of 4.
     #[inline]
     pub fn dot(&self, q: &[f64]) -> f64 {
-        self.g.iter().zip(q).map(|(a, b)| a * b).sum()
+        let n = self.g.len().min(q.len());
+        let (g, q) = (&self.g[..n], &q[..n]);
+        let n4 = n / 4 * 4;
+        // The neutral element `Sum` starts from.
+        let mut acc: f64 = std::iter::empty::<f64>().sum();
+        for (gc, qc) in g[..n4].chunks_exact(4).zip(q[..n4].chunks_exact(4)) {
+            let gc: [f64; 4] = gc.try_into().unwrap();
+            let qc: [f64; 4] = qc.try_into().unwrap();
+            let pr: [f64; 4] = std::array::from_fn(|i| gc[i] * qc[i]);
+            for p in pr {
+                acc += p;
+            }
+        }
+        for (a, b) in g[n4..].iter().zip(&q[n4..]) {
+            acc += a * b;
+        }
+        acc
     }
 
     /// δ = g·q − gap, m.

@@ -245,9 +245,13 @@ pub struct StepCoeffs {
     pub dq: [Vec<f64>; 10],
     /// The same coefficients interleaved by chunks of 4 modes (the fast-step kernel
     /// [`propagate`]), the modes past the last full chunk in a last chunk padded with zero
-    /// coefficients (its padding lanes compute zeros and are never read).
+    /// coefficients (its padding lanes compute zeros and are never read; used with fewer
+    /// than 4 modes, else `last`).
     pub blocks: Vec<StepBlock<4>>,
     pub tail: Option<StepBlock<4>>,
+    /// With at least 4 modes and a remainder: the last 4 modes as a full chunk (it overlaps
+    /// the last full chunk; the overlapping modes compute the same values again).
+    pub last: Option<StepBlock<4>>,
 }
 
 /// Step coefficients of W consecutive modes, field by field (see [`StepCoeffs`]): a00 a01
@@ -330,6 +334,7 @@ impl StepCoeffs {
             dq: Default::default(),
             blocks: Vec::new(),
             tail: None,
+            last: None,
         };
         for q in c.dq.iter_mut() {
             *q = vec![0.0; nm];
@@ -353,7 +358,12 @@ impl StepCoeffs {
                 e[i] = 1.0;
                 e
             };
-            let i_of = |e: [f64; 4]| Arc::new(w, z, e[0], e[1], e[2], e[3], h).damping_integral(h);
+            // The exponential integrals are the mode's, whatever the arc.
+            let a0 = Arc::new(w, z, 0.0, 0.0, 0.0, 0.0, h);
+            let kern = a0.damping_kernels(h, a0.trig(h));
+            let i_of = |e: [f64; 4]| {
+                Arc::new(w, z, e[0], e[1], e[2], e[3], h).damping_integral_with(h, &kern)
+            };
             let diag: Vec<f64> = (0..4).map(|i| i_of(unit(i))).collect();
             let mut k = 0;
             for i in 0..4 {
@@ -375,7 +385,69 @@ impl StepCoeffs {
             .map(|k| StepBlock::gather(&c, &modal.gamma, 4 * k, 4))
             .collect();
         c.tail = (n4 < nm).then(|| StepBlock::gather(&c, &modal.gamma, n4, nm - n4));
+        c.last = (n4 < nm && nm >= 4).then(|| StepBlock::gather(&c, &modal.gamma, nm - 4, 4));
         c
+    }
+}
+
+/// The exponential integrals of one mode's damping integral over [0, s]
+/// ([`Arc::damping_kernels`]).
+#[derive(Debug, Clone, Copy)]
+pub struct DampingKernels {
+    e1c: f64,
+    e1s: f64,
+    e2c: f64,
+    e2s: f64,
+    xm: f64,
+}
+
+/// A small memo of [`Arc::trig`] of one arc, keyed by the bits of s (the segment's event
+/// location evaluates the arcs at the window ends again and again, and the end state at
+/// the located root): a hit returns the very values `trig` returned.
+#[derive(Debug, Clone, Copy)]
+pub struct TrigMemo {
+    keys: [u64; 4],
+    vals: [[f64; 3]; 4],
+    next: usize,
+}
+
+impl TrigMemo {
+    /// No entry (the key bits are a NaN, and NaN arguments are never looked up).
+    pub const EMPTY: TrigMemo = TrigMemo {
+        keys: [u64::MAX; 4],
+        vals: [[0.0; 3]; 4],
+        next: 0,
+    };
+
+    /// [`Arc::trig`] of `a` at s, from the memo if s was evaluated (for this arc) recently.
+    #[inline]
+    pub fn get(&mut self, a: &Arc, s: f64) -> [f64; 3] {
+        let k = s.to_bits();
+        if !s.is_nan() {
+            for i in 0..4 {
+                if self.keys[i] == k {
+                    return self.vals[i];
+                }
+            }
+        }
+        let t = a.trig(s);
+        self.put(s, t);
+        t
+    }
+
+    /// Forgets every entry.
+    #[inline]
+    pub fn clear(&mut self) {
+        self.keys = [u64::MAX; 4];
+    }
+
+    /// Records `t` = [`Arc::trig`] at s.
+    #[inline]
+    pub fn put(&mut self, s: f64, t: [f64; 3]) {
+        let i = self.next;
+        self.keys[i] = s.to_bits();
+        self.vals[i] = t;
+        self.next = (i + 1) & 3;
     }
 }
 
@@ -428,12 +500,45 @@ impl Arc {
     /// (q(s), q̇(s)).
     #[inline]
     pub fn xv(&self, s: f64) -> (f64, f64) {
-        let e = (-self.c * s).exp();
-        let (sn, cs) = (self.d * s).sin_cos();
+        let t = self.trig(s);
+        self.xv_from(s, t)
+    }
+
+    /// The transcendental part of an evaluation at s: [e^{−ζωs}, sin ω_d s, cos ω_d s].
+    #[inline]
+    pub fn trig(&self, s: f64) -> [f64; 3] {
+        let (p, q) = (-self.c * s, self.d * s);
+        if p == 0.0 && q == 0.0 {
+            // exp(±0) = 1, sin(±0) = ±0, cos(±0) = 1 exactly (what libm returns).
+            return [1.0, q, 1.0];
+        }
+        let e = p.exp();
+        let (sn, cs) = q.sin_cos();
+        [e, sn, cs]
+    }
+
+    /// (q(s), q̇(s)) from [`Arc::trig`] at s.
+    #[inline]
+    pub fn xv_from(&self, s: f64, [e, sn, cs]: [f64; 3]) -> (f64, f64) {
         let h = self.a * cs + self.b * sn;
         let hd =
             (self.b * self.d - self.c * self.a) * cs - (self.a * self.d + self.c * self.b) * sn;
         (self.alpha + self.beta * s + e * h, self.beta + e * hd)
+    }
+
+    /// q(s) alone from [`Arc::trig`] at s (the same bits as `xv_from(s, t).0`).
+    #[inline]
+    pub fn x_from(&self, s: f64, [e, sn, cs]: [f64; 3]) -> f64 {
+        let h = self.a * cs + self.b * sn;
+        self.alpha + self.beta * s + e * h
+    }
+
+    /// q̇(s) alone from [`Arc::trig`] at s (the same bits as `xv_from(s, t).1`).
+    #[inline]
+    pub fn v_from(&self, [e, sn, cs]: [f64; 3]) -> f64 {
+        let hd =
+            (self.b * self.d - self.c * self.a) * cs - (self.a * self.d + self.c * self.b) * sn;
+        self.beta + e * hd
     }
 
     /// Load at s.
@@ -450,27 +555,58 @@ impl Arc {
 
     /// ∫₀ˢ q̇² dσ in closed form.
     pub fn damping_integral(&self, s: f64) -> f64 {
+        self.damping_integral_from(s, self.trig(s))
+    }
+
+    /// [`Arc::damping_integral`] given [`Arc::trig`] at s (e^{−ζωs}, sin ω_d s, cos ω_d s
+    /// are the values of its first exponential integral).
+    #[inline]
+    pub fn damping_integral_from(&self, s: f64, t: [f64; 3]) -> f64 {
+        self.damping_integral_with(s, &self.damping_kernels(s, t))
+    }
+
+    /// [`Arc::damping_integral`] from its exponential integrals ([`Arc::damping_kernels`],
+    /// which depend on the mode and s only).
+    #[inline]
+    pub fn damping_integral_with(&self, s: f64, k: &DampingKernels) -> f64 {
         let (c, d) = (self.c, self.d);
         let cc = self.b * d - c * self.a;
         let dd = -(self.a * d + c * self.b);
+        let j1 = cc * k.e1c + dd * k.e1s;
+        let j2 =
+            0.5 * (cc * cc + dd * dd) * k.xm + 0.5 * (cc * cc - dd * dd) * k.e2c + cc * dd * k.e2s;
+        self.beta * self.beta * s + 2.0 * self.beta * j1 + j2
+    }
+
+    /// The exponential integrals of [`Arc::damping_integral`] over [0, s] given
+    /// [`Arc::trig`] at s: ∫ e^{ps} cos qs, ∫ e^{ps} sin qs for (p, q) = (−ζω, ω_d) and
+    /// (−2ζω, 2ω_d), and ∫ e^{−2ζωσ} dσ.
+    #[inline]
+    pub fn damping_kernels(&self, s: f64, [e1, sn1, cs1]: [f64; 3]) -> DampingKernels {
+        let (c, d) = (self.c, self.d);
         // ∫ e^{ps} cos qs, ∫ e^{ps} sin qs over [0, s]
-        let ecs = |p: f64, q: f64| -> (f64, f64) {
-            let e = (p * s).exp();
-            let (sn, cs) = (q * s).sin_cos();
+        let fin = |p: f64, q: f64, e: f64, sn: f64, cs: f64| -> (f64, f64) {
             let den = p * p + q * q;
             (
                 (e * (p * cs + q * sn) - p) / den,
                 (e * (p * sn - q * cs) + q) / den,
             )
         };
+        let ecs = |p: f64, q: f64| -> (f64, f64) {
+            let e = (p * s).exp();
+            let (sn, cs) = (q * s).sin_cos();
+            fin(p, q, e, sn, cs)
+        };
         let x = |p: f64| if p == 0.0 { s } else { (p * s).exp_m1() / p };
-        let (e1c, e1s) = ecs(-c, d);
+        let (e1c, e1s) = fin(-c, d, e1, sn1, cs1);
         let (e2c, e2s) = ecs(-2.0 * c, 2.0 * d);
-        let j1 = cc * e1c + dd * e1s;
-        let j2 = 0.5 * (cc * cc + dd * dd) * x(-2.0 * c)
-            + 0.5 * (cc * cc - dd * dd) * e2c
-            + cc * dd * e2s;
-        self.beta * self.beta * s + 2.0 * self.beta * j1 + j2
+        DampingKernels {
+            e1c,
+            e1s,
+            e2c,
+            e2s,
+            xm: x(-2.0 * c),
+        }
     }
 
     /// Work of the load ∫₀ˢ f q̇ dσ given the end state (x1, v1) = (q(s), q̇(s)), exact.

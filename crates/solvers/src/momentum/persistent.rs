@@ -282,7 +282,7 @@ impl Stepper<'_> {
                 tol: 2.0 * f64::EPSILON * (self.s.t + tau) + 1e-300,
                 iterations: 0,
             };
-            let r = roots::find_root_brent(0.0, tau, f, &mut conv);
+            let r = super::events::find_root_brent(0.0, tau, f, &mut conv);
             if let Some(e) = err.into_inner() {
                 return Err(e);
             }

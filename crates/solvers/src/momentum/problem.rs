@@ -51,6 +51,11 @@ pub struct Problem {
     /// Propagators from a step start to its interior check points k·h/sub, k = 1 … sub−1
     /// (per point, per mode: a00 a01 b00 b01 a10 a11 b10 b11).
     pub checks: Vec<Vec<[f64; 8]>>,
+    /// The same by chunks of 4 modes starting at `check_starts` (0, 4, …, and the last 4
+    /// modes when a remainder is left; empty with fewer than 4 modes): per point, per chunk,
+    /// the 8 coefficients then Γ, lane by lane.
+    pub check_blocks: Vec<Vec<[[f64; 4]; 9]>>,
+    pub check_starts: Vec<usize>,
     /// ω_n².
     pub omega2: Vec<f64>,
     /// √(Σ_n Γ_n²), kg^½ (norm of the modal load per unit a_g).
@@ -109,7 +114,7 @@ impl Problem {
             });
         }
         let h = record_dt;
-        let checks = (1..sub)
+        let checks: Vec<Vec<[f64; 8]>> = (1..sub)
             .map(|k| {
                 let s = h * k as f64 / sub as f64;
                 (0..modal.len())
@@ -119,6 +124,29 @@ impl Problem {
                             pr.a[0][0], pr.a[0][1], pr.b[0][0], pr.b[0][1], pr.a[1][0], pr.a[1][1],
                             pr.b[1][0], pr.b[1][1],
                         ]
+                    })
+                    .collect()
+            })
+            .collect();
+        let nm = modal.len();
+        let mut check_starts: Vec<usize> = (0..nm / 4).map(|k| 4 * k).collect();
+        if nm % 4 != 0 && nm >= 4 {
+            check_starts.push(nm - 4);
+        }
+        let check_blocks = checks
+            .iter()
+            .map(|pt: &Vec<[f64; 8]>| {
+                check_starts
+                    .iter()
+                    .map(|&n0| {
+                        let mut b = [[0.0; 4]; 9];
+                        for i in 0..4 {
+                            for f in 0..8 {
+                                b[f][i] = pt[n0 + i][f];
+                            }
+                            b[8][i] = modal.gamma[n0 + i];
+                        }
+                        b
                     })
                     .collect()
             })
@@ -152,6 +180,8 @@ impl Problem {
             sub,
             h,
             checks,
+            check_blocks,
+            check_starts,
             n_steps,
             ag_start,
             ag_end,

@@ -17,7 +17,7 @@ use structure::Scene;
 use super::energy::EnergyAccount;
 use super::events::Locator;
 pub use super::impact::ImpactDiagnostics;
-use super::modal::Arc;
+use super::modal::{Arc, TrigMemo};
 use super::peaks;
 pub use super::problem::{Problem, MAX_SUB, SIMULTANEOUS};
 use crate::overlap::OverlapTracker;
@@ -92,11 +92,26 @@ pub struct Stepper<'a> {
     /// Per-mode energy sums of the fast path (input, damping), J; folded in by `finish`.
     pub(super) win_acc: Vec<f64>,
     pub(super) dmp_acc: Vec<f64>,
+    /// The sums including the step being tried (exchanged with the sums on acceptance).
     pub(super) win_step: Vec<f64>,
     pub(super) dmp_step: Vec<f64>,
+    /// g·x of the first contact at the fast step's start, summed as `delta_fast` does.
+    pub(super) delta0: f64,
+    /// Per mode q̇² + ω² q² at the start of the fast step (the terms of 2E).
+    pub(super) e_terms: Vec<f64>,
+    /// The fast path found that base step j needs the closed form (state unchanged since).
+    pub(super) fast_rejected: Option<usize>,
+    /// Scratch of the fast step's interior checks: per mode the δ and δ̇ terms (before g).
+    pub(super) check_d: Vec<f64>,
+    pub(super) check_dd: Vec<f64>,
     pub(super) shear_max: Vec<Vec<f64>>,
     pub(super) stiffness: Vec<Vec<f64>>,
     pub(super) arcs: Vec<Arc>,
+    /// [`Arc::trig`] of every arc at the segment end τ (shared by the end state and the
+    /// damping integral).
+    pub(super) trig_end: Vec<[f64; 3]>,
+    /// Per arc: memo of [`Arc::trig`] (cleared when the arcs are rebuilt).
+    pub(super) memo: Vec<TrigMemo>,
     /// Floor displacements and velocities at the current and at the previous sample, per
     /// building. These four
     /// buffers hold a leading zero (the ground) before the padded floors: floor i is at
@@ -163,6 +178,62 @@ pub struct Stepper<'a> {
     pub(super) overlap_stale: bool,
 }
 
+/// Σ t as [`super::observe::twice_energy`] sums its terms: four lane sums over chunks of
+/// 4 from the start, the remainder into lane 0, then (l₀ + l₁) + (l₂ + l₃).
+#[inline(always)]
+fn lane_sum(t: &[f64]) -> f64 {
+    let n = t.len();
+    let n4 = n / 4 * 4;
+    let mut acc = [0.0f64; 4];
+    let mut i = 0;
+    while i < n4 {
+        let c: [f64; 4] = t[i..i + 4].try_into().unwrap();
+        acc = std::array::from_fn(|k| acc[k] + c[k]);
+        i += 4;
+    }
+    let mut l0 = acc[0];
+    for &tk in &t[n4..] {
+        l0 += tk;
+    }
+    (l0 + acc[1]) + (acc[2] + acc[3])
+}
+
+/// One chunk of 4 modes `r` of the fast step: the new state into (xn, vn), the energy sums
+/// plus this step's energies into (win, dmp).
+#[inline(always)]
+#[allow(clippy::type_complexity, clippy::too_many_arguments)]
+fn propagate_chunk(
+    blk: &super::modal::StepBlock<4>,
+    r: std::ops::Range<usize>,
+    (x, v): (&[f64], &[f64]),
+    (xn, vn): (&mut [f64], &mut [f64]),
+    (wacc, dacc): (&[f64], &[f64]),
+    (win, dmp): (&mut [f64], &mut [f64]),
+    (a0, a1, h): (f64, f64, f64),
+    (w2, et): (&[f64], &mut [f64]),
+) {
+    let (xc, vc, wc): ([f64; 4], [f64; 4], [f64; 4]) = (
+        x[r.clone()].try_into().unwrap(),
+        v[r.clone()].try_into().unwrap(),
+        w2[r.clone()].try_into().unwrap(),
+    );
+    // The terms of 2E at the start (as `observe::twice_energy`).
+    let terms: [f64; 4] = std::array::from_fn(|i| vc[i] * vc[i] + wc[i] * xc[i] * xc[i]);
+    et[r.clone()].copy_from_slice(&terms);
+    let out = super::modal::propagate::<4>(blk, xc, vc, a0, a1, h);
+    xn[r.clone()].copy_from_slice(&out[0]);
+    vn[r.clone()].copy_from_slice(&out[1]);
+    // (All loads before the stores: the buffers are not known to be distinct.)
+    let (wa, da): ([f64; 4], [f64; 4]) = (
+        wacc[r.clone()].try_into().unwrap(),
+        dacc[r.clone()].try_into().unwrap(),
+    );
+    let wsum: [f64; 4] = std::array::from_fn(|i| wa[i] + out[2][i]);
+    let dsum: [f64; 4] = std::array::from_fn(|i| da[i] + out[3][i]);
+    win[r.clone()].copy_from_slice(&wsum);
+    dmp[r].copy_from_slice(&dsum);
+}
+
 /// Pairs `k0 .. k0 + n` of the overlap audit: floors `i0 + t` of building `left` against
 /// `j0 + t` of building `right`, t < n.
 #[derive(Debug, Clone, Copy)]
@@ -222,6 +293,11 @@ impl<'a> Stepper<'a> {
             dmp_acc: vec![0.0; nm],
             win_step: vec![0.0; nm],
             dmp_step: vec![0.0; nm],
+            delta0: 0.0,
+            e_terms: vec![0.0; nm],
+            fast_rejected: None,
+            check_d: vec![0.0; nm],
+            check_dd: vec![0.0; nm],
             disp_max: p
                 .modal
                 .buildings
@@ -251,6 +327,8 @@ impl<'a> Stepper<'a> {
                 .map(|b| vec![0.0; b.padded_floors() + 1])
                 .collect(),
             arcs: Vec::with_capacity(nm),
+            trig_end: vec![[0.0; 3]; nm],
+            memo: vec![TrigMemo::EMPTY; nm],
             ud: p
                 .modal
                 .buildings
@@ -466,12 +544,24 @@ impl<'a> Stepper<'a> {
             .collect()
     }
 
+    #[inline(always)]
     pub(super) fn count_step(&mut self, tau: f64) -> Result<(), SolverError> {
         self.stats.steps += 1;
         if tau > 0.0 {
             self.stats.min_step = self.stats.min_step.min(tau);
             self.stats.max_step = self.stats.max_step.max(tau);
         }
+        // Checked every 64 segments (and at the end): a non-finite mode stays non-finite.
+        if self.stats.steps > self.p.limits.max_steps || self.stats.steps % 64 == 0 {
+            return self.count_step_checks();
+        }
+        Ok(())
+    }
+
+    /// The rare part of [`Stepper::count_step`]: the step budget and the finiteness check.
+    #[cold]
+    #[inline(never)]
+    fn count_step_checks(&self) -> Result<(), SolverError> {
         if self.stats.steps > self.p.limits.max_steps {
             return Err(SolverError::StepBudget {
                 time: self.s.t,
@@ -479,7 +569,6 @@ impl<'a> Stepper<'a> {
                 limit: self.p.limits.max_steps,
             });
         }
-        // Checked every 64 segments (and at the end): a non-finite mode stays non-finite.
         if self.stats.steps % 64 == 0 && !self.state_is_finite() {
             return Err(SolverError::NonFinite {
                 time: self.s.t,
@@ -531,11 +620,36 @@ impl<'a> Stepper<'a> {
             return self.persistent_segment(tau, t_end);
         }
         if self.s.on_grid && (tau - p.h).abs() <= 1e-9 * p.h {
-            if let Some(step) = self.fast_step(j, t_end)? {
-                return Ok(step);
+            // (A step the fast path already tried from this very state is not tried again.)
+            if std::mem::take(&mut self.fast_rejected) != Some(j) {
+                if let Some(step) = self.fast_step(j, t_end)? {
+                    return Ok(step);
+                }
             }
         }
         self.segment(tau, t_end, None, true)
+    }
+
+    /// The next step if [`Stepper::advance`] would take it on the fast path (the same tests
+    /// in the same order): its index and end time.
+    #[inline(always)]
+    fn next_fast(&self) -> Option<(usize, f64)> {
+        let p = self.p;
+        let end_tol = 1e-12 * p.h;
+        if self.s.t >= p.duration - end_tol {
+            return None;
+        }
+        let j = self.s.j;
+        let t_end = if j + 1 >= p.n_steps {
+            p.duration
+        } else {
+            p.grid(j + 1)
+        };
+        let tau = t_end - self.s.t;
+        if tau <= end_tol.max(1e-15 * self.s.t) || !self.s.persistent.is_empty() {
+            return None;
+        }
+        (self.s.on_grid && (tau - p.h).abs() <= 1e-9 * p.h).then_some((j, t_end))
     }
 
     pub(super) fn finish_grid(&mut self, j: usize, t_end: f64) {
@@ -560,7 +674,29 @@ impl<'a> Stepper<'a> {
             type Output = Result<Option<Step>, SolverError>;
             #[inline(always)]
             fn with_simd<S: pulp::Simd>(self, _: S) -> Self::Output {
-                self.st.fast_step_body(self.j, self.t_end)
+                // Consecutive fast steps in one dispatch: after an accepted step, the next
+                // one too if `advance` would take it on the fast path (the caller does
+                // nothing between `Reached` steps). A step found to need the closed form
+                // after some were accepted ends the run as `Reached` with the state at its
+                // start, remembered so that `advance` goes to the closed form at once.
+                let (mut j, mut t_end) = (self.j, self.t_end);
+                let mut accepted = false;
+                loop {
+                    match self.st.fast_step_body(j, t_end)? {
+                        None if accepted => {
+                            self.st.fast_rejected = Some(j);
+                            return Ok(Some(Step::Reached));
+                        }
+                        None => return Ok(None),
+                        Some(step) => match self.st.next_fast() {
+                            Some(next) => {
+                                accepted = true;
+                                (j, t_end) = next;
+                            }
+                            None => return Ok(Some(step)),
+                        },
+                    }
+                }
             }
         }
         let arch = self.arch;
@@ -580,31 +716,68 @@ impl<'a> Stepper<'a> {
             let n4 = nm / 4 * 4;
             let (x, v) = (&self.s.x[..nm], &self.s.v[..nm]);
             let (xn, vn) = (&mut self.xn[..nm], &mut self.vn[..nm]);
+            // The energy sums with this step's energies go to the spare buffers (exchanged
+            // with the sums if the step is accepted).
             let (win, dmp) = (&mut self.win_step[..nm], &mut self.dmp_step[..nm]);
+            let (wacc, dacc) = (&self.win_acc[..nm], &self.dmp_acc[..nm]);
+            let (w2, et) = (&p.omega2[..nm], &mut self.e_terms[..nm]);
+            // δ of the first contact at the start as `ContactGeom::delta_fast` sums it (four
+            // lane sums over the chunks, the remainder into lane 0), while x passes by (with
+            // no contact, a dummy sum).
+            let g0 = p.contacts.first().map_or(x, |ct| &ct.g[..nm]);
+            let mut gacc = [0.0f64; 4];
             for (k, blk) in c.blocks.iter().enumerate() {
                 let r = 4 * k..4 * k + 4;
-                let out = super::modal::propagate::<4>(
-                    blk,
+                let (gc, xc): ([f64; 4], [f64; 4]) = (
+                    g0[r.clone()].try_into().unwrap(),
                     x[r.clone()].try_into().unwrap(),
-                    v[r.clone()].try_into().unwrap(),
-                    a0,
-                    a1,
-                    h,
                 );
-                xn[r.clone()].copy_from_slice(&out[0]);
-                vn[r.clone()].copy_from_slice(&out[1]);
-                win[r.clone()].copy_from_slice(&out[2]);
-                dmp[r].copy_from_slice(&out[3]);
+                gacc = std::array::from_fn(|i| gacc[i] + gc[i] * xc[i]);
+                propagate_chunk(
+                    blk,
+                    r,
+                    (x, v),
+                    (xn, vn),
+                    (wacc, dacc),
+                    (win, dmp),
+                    (a0, a1, h),
+                    (w2, &mut *et),
+                );
             }
-            if let Some(tail) = &c.tail {
-                let (mut xt, mut vt) = ([0.0; 4], [0.0; 4]);
-                xt[..nm - n4].copy_from_slice(&x[n4..]);
-                vt[..nm - n4].copy_from_slice(&v[n4..]);
+            for k in n4..nm {
+                gacc[0] += g0[k] * x[k];
+            }
+            self.delta0 = (gacc[0] + gacc[1]) + (gacc[2] + gacc[3]);
+            if let Some(last) = &c.last {
+                // The remainder as the last 4 modes (the first of them again: same values).
+                let r = nm - 4..nm;
+                propagate_chunk(
+                    last,
+                    r,
+                    (x, v),
+                    (xn, vn),
+                    (wacc, dacc),
+                    (win, dmp),
+                    (a0, a1, h),
+                    (w2, &mut *et),
+                );
+            } else if let Some(tail) = &c.tail {
+                // Lane by lane (variable-length slice copies would be library calls).
+                let t = nm - n4;
+                let lane = |s: &[f64], i: usize| if i < t { s[n4 + i] } else { 0.0 };
+                let xt: [f64; 4] = std::array::from_fn(|i| lane(x, i));
+                let vt: [f64; 4] = std::array::from_fn(|i| lane(v, i));
                 let out = super::modal::propagate::<4>(tail, xt, vt, a0, a1, h);
-                xn[n4..].copy_from_slice(&out[0][..nm - n4]);
-                vn[n4..].copy_from_slice(&out[1][..nm - n4]);
-                win[n4..].copy_from_slice(&out[2][..nm - n4]);
-                dmp[n4..].copy_from_slice(&out[3][..nm - n4]);
+                for i in 0..4 {
+                    if i < t {
+                        let n = n4 + i;
+                        et[n] = v[n] * v[n] + w2[n] * x[n] * x[n];
+                        xn[n4 + i] = out[0][i];
+                        vn[n4 + i] = out[1][i];
+                        win[n4 + i] = wacc[n4 + i] + out[2][i];
+                        dmp[n4 + i] = dacc[n4 + i] + out[3][i];
+                    }
+                }
             }
         }
         // Rigorous skip of far contacts: d√(2E)/dt ≤ |f| (modal load norm), so over the step
@@ -614,7 +787,8 @@ impl<'a> Stepper<'a> {
         // energy envelope of this interval), and their sum for the contact bound.
         let mut e2 = 0.0;
         for (b, bm) in p.modal.buildings.iter().enumerate() {
-            let e = super::observe::twice_energy(&self.s.x, &self.s.v, &p.omega2, bm.range.clone());
+            // (= observe::twice_energy: the same terms, summed alike)
+            let e = lane_sum(&self.e_terms[bm.range.clone()]);
             self.env_e2[b] = e;
             e2 += e;
         }
@@ -626,7 +800,12 @@ impl<'a> Stepper<'a> {
             // δ, δ̇ at the window ends 0, h/sub, …, h. The skip test uses the vectorised
             // sum: its round-off (≲ 30 ε |g|·|q|) is far inside the bound's relative margin
             // of 1e-9 (h·√W·vbound ≥ h ω_min |g|·|q|).
-            if ct.delta_fast(&self.s.x) < -h * p.sqrt_w[ci] * vbound * (1.0 + 1e-9) {
+            let df = if ci == 0 {
+                self.delta0 - ct.gap
+            } else {
+                ct.delta_fast(&self.s.x)
+            };
+            if df < -h * p.sqrt_w[ci] * vbound * (1.0 + 1e-9) {
                 continue;
             }
             let d_start = ct.delta(&self.s.x);
@@ -637,6 +816,37 @@ impl<'a> Stepper<'a> {
             for w in 1..=sub {
                 let cur = if w == sub {
                     (ct.delta(&self.xn), ct.dot(&self.vn))
+                } else if !p.check_starts.is_empty() {
+                    // The per-mode terms by chunks of 4 (the same expressions), then the
+                    // sums in mode order.
+                    let r = w as f64 / sub as f64;
+                    let fr = a0 + r * (a1 - a0);
+                    let nm = self.s.x.len();
+                    let (x, v) = (&self.s.x[..nm], &self.s.v[..nm]);
+                    let (td, tdd) = (&mut self.check_d[..nm], &mut self.check_dd[..nm]);
+                    for (k, &n0) in p.check_blocks[w - 1].iter().zip(&p.check_starts) {
+                        let rr = n0..n0 + 4;
+                        let x0: [f64; 4] = x[rr.clone()].try_into().unwrap();
+                        let v0: [f64; 4] = v[rr.clone()].try_into().unwrap();
+                        let mut a = [0.0; 4];
+                        let mut b = [0.0; 4];
+                        for i in 0..4 {
+                            let gam = k[8][i];
+                            let (f0, f1) = (-gam * a0, -gam * fr);
+                            a[i] = k[0][i] * x0[i] + k[1][i] * v0[i] + k[2][i] * f0 + k[3][i] * f1;
+                            b[i] = k[4][i] * x0[i] + k[5][i] * v0[i] + k[6][i] * f0 + k[7][i] * f1;
+                        }
+                        td[rr.clone()].copy_from_slice(&a);
+                        tdd[rr].copy_from_slice(&b);
+                    }
+                    let (mut d, mut dd) = (-ct.gap, 0.0);
+                    for ((g, t), tt) in ct.g.iter().zip(&*td).zip(&*tdd) {
+                        if *g != 0.0 {
+                            d += g * t;
+                            dd += g * tt;
+                        }
+                    }
+                    (d, dd)
                 } else {
                     let r = w as f64 / sub as f64;
                     let (mut d, mut dd) = (-ct.gap, 0.0);
@@ -670,6 +880,7 @@ impl<'a> Stepper<'a> {
                         tol: 0.0,
                         shift: 0.0,
                         iterations: 0,
+                        memo: &mut self.memo,
                     };
                     if !loc.surely_open(prev.0, prev.1, cur.0, cur.1) {
                         return Ok(None);
@@ -687,12 +898,8 @@ impl<'a> Stepper<'a> {
         let iv = &mut self.interval;
         (iv.a0, iv.a1, iv.tau, iv.fc) = (a0, a1, h, None);
         // Energy of the accepted step only (a step with a possible event is discarded).
-        for (acc, w) in self.win_acc.iter_mut().zip(&self.win_step) {
-            *acc += w;
-        }
-        for (acc, d) in self.dmp_acc.iter_mut().zip(&self.dmp_step) {
-            *acc += d;
-        }
+        std::mem::swap(&mut self.win_acc, &mut self.win_step);
+        std::mem::swap(&mut self.dmp_acc, &mut self.dmp_step);
         self.finish_grid(j, t_end);
         self.count_step(h)?;
         self.interval.tau_done = h;
@@ -705,6 +912,7 @@ impl<'a> Stepper<'a> {
     pub(super) fn build_arcs(&mut self, a0: f64, a1: f64, tau: f64, fc: Option<&[f64]>) {
         let m = &self.p.modal;
         self.arcs.clear();
+        self.memo.iter_mut().for_each(TrigMemo::clear);
         for n in 0..m.len() {
             let extra = fc.map_or(0.0, |f| f[n]);
             let (f0, f1) = (-m.gamma[n] * a0 + extra, -m.gamma[n] * a1 + extra);
@@ -717,6 +925,17 @@ impl<'a> Stepper<'a> {
                 f1,
                 tau,
             ));
+        }
+    }
+
+    /// The state at the end τ of the arcs' segment into `xn`, `vn` (and `trig_end`).
+    fn end_state(&mut self, tau: f64) {
+        for n in 0..self.arcs.len() {
+            let t = self.memo[n].get(&self.arcs[n], tau);
+            let (x1, v1) = self.arcs[n].xv_from(tau, t);
+            self.xn[n] = x1;
+            self.vn[n] = v1;
+            self.trig_end[n] = t;
         }
     }
 
@@ -734,11 +953,9 @@ impl<'a> Stepper<'a> {
         let (a0, a1) = (p.ground(j, self.s.t), p.ground(j, t_end));
         self.begin_interval(a0, a1, tau, fc);
         self.build_arcs(a0, a1, tau, fc);
-        for n in 0..self.arcs.len() {
-            let (x1, v1) = self.arcs[n].xv(tau);
-            self.xn[n] = x1;
-            self.vn[n] = v1;
-        }
+        // The state at τ (xn, vn), computed when first needed: a closure located in an
+        // earlier window does not need it.
+        let mut end_ready = false;
         let tol = 2.0 * f64::EPSILON * (self.s.t + tau) + 1e-300;
         let mut first: Option<f64> = None;
         let mut found: Vec<(usize, f64)> = vec![];
@@ -748,11 +965,11 @@ impl<'a> Stepper<'a> {
             }
             // Windows of at most h/sub: at most one extremum of δ each.
             let m = ((tau / (p.h / p.sub as f64)) - 1e-9).ceil().max(1.0) as usize;
-            let at = |s: f64, arcs: &[Arc]| {
+            let at = |s: f64, arcs: &[Arc], memo: &mut [TrigMemo]| {
                 let (mut d, mut dd) = (-ct.gap, 0.0);
-                for (g, a) in ct.g.iter().zip(arcs) {
+                for ((g, a), mm) in ct.g.iter().zip(arcs).zip(memo.iter_mut()) {
                     if *g != 0.0 {
-                        let (x, v) = a.xv(s);
+                        let (x, v) = a.xv_from(s, mm.get(a, s));
                         d += g * x;
                         dd += g * v;
                     }
@@ -775,9 +992,13 @@ impl<'a> Stepper<'a> {
                     },
                 );
                 let cur = if w == m {
+                    if !end_ready {
+                        self.end_state(tau);
+                        end_ready = true;
+                    }
                     (ct.delta(&self.xn) - shift, ct.dot(&self.vn))
                 } else {
-                    let (d, dd) = at(hi, &self.arcs);
+                    let (d, dd) = at(hi, &self.arcs, &mut self.memo);
                     (d - shift, dd)
                 };
                 let mut loc = Locator {
@@ -789,6 +1010,7 @@ impl<'a> Stepper<'a> {
                     tol,
                     shift,
                     iterations: 0,
+                    memo: &mut self.memo,
                 };
                 r = loc.locate(prev.0, prev.1, cur.0, cur.1);
                 self.stats.root_iterations += loc.iterations;
@@ -820,13 +1042,18 @@ impl<'a> Stepper<'a> {
             }
         };
         // Commit [0, s_end] with its energy.
+        if s_end == tau && !end_ready {
+            self.end_state(tau);
+        }
         let m = &p.modal;
         for n in 0..self.arcs.len() {
             let a = self.arcs[n];
-            let (x1, v1) = if s_end == tau {
-                (self.xn[n], self.vn[n])
+            let (x1, v1, t) = if s_end == tau {
+                (self.xn[n], self.vn[n], self.trig_end[n])
             } else {
-                a.xv(s_end)
+                let t = self.memo[n].get(&a, s_end);
+                let (x1, v1) = a.xv_from(s_end, t);
+                (x1, v1, t)
             };
             if s_end > 0.0 {
                 let w = a.load_work(s_end, x1, v1);
@@ -834,7 +1061,8 @@ impl<'a> Stepper<'a> {
                 let wc = extra * (x1 - a.x0);
                 self.energy.input += w - wc;
                 self.energy.contact -= wc;
-                self.energy.damping += 2.0 * m.zeta[n] * m.omega[n] * a.damping_integral(s_end);
+                self.energy.damping +=
+                    2.0 * m.zeta[n] * m.omega[n] * a.damping_integral_from(s_end, t);
             }
             self.s.x[n] = x1;
             self.s.v[n] = v1;
