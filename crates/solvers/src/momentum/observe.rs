@@ -53,30 +53,35 @@ impl Stepper<'_> {
                 &mut self.u[b][1..],
                 &mut self.ud[b][1..],
             );
-            let (raised, flagged) = sample(
+            let (raised, turns) = sample(
                 Sample {
                     u: &self.u[b],
                     ud: &self.ud[b],
-                    up: &self.u_prev[b],
                     udp: &self.ud_prev[b],
                     k: &self.stiffness[b],
-                    disp_lower: &self.disp_lower[b],
-                    shear_lower: &self.shear_lower[b],
                 },
                 &mut self.disp_max[b],
                 &mut self.shear_max[b],
                 &mut self.flags,
-                len,
             );
             self.env_stale[b] |= raised;
-            if flagged {
+            if turns && len > 0.0 {
                 // The rare slow path, in the order floor 0 displacement, story 0 shear,
-                // floor 1 …: the same filter, quantity by quantity.
+                // floor 1 …: each quantity whose rate changes sign, through the filter of
+                // `interior_extremum`.
                 let n = self.disp_max[b].len();
-                for i in 0..nf {
-                    for story in [false, true] {
-                        if self.flags[i + if story { n } else { 0 }] != 0 {
-                            self.interior_extremum(b, i, story, len, &mut stored);
+                for i0 in (0..n).step_by(4) {
+                    let word =
+                        |f: &[u8], o: usize| u32::from_ne_bytes(f[o..o + 4].try_into().unwrap());
+                    if word(&self.flags, i0) | word(&self.flags, n + i0) == 0 {
+                        continue;
+                    }
+                    for i in i0..i0 + 4 {
+                        if self.flags[i] != 0 {
+                            self.interior_extremum(b, i, false, len, &mut stored);
+                        }
+                        if self.flags[n + i] != 0 {
+                            self.interior_extremum(b, i, true, len, &mut stored);
                         }
                     }
                 }
@@ -287,6 +292,7 @@ impl Stepper<'_> {
         let (mut turns, mut raised) = (false, false);
         {
             let (u, ud, udp) = (&self.u, &self.ud, &self.ud_prev);
+            let now = self.s.t;
             let ov = &mut self.overlaps;
             for run in &self.overlap_runs {
                 let (n, k0) = (run.n, run.k0);
@@ -297,15 +303,35 @@ impl Stepper<'_> {
                 let max = &mut ov.max[k0..k0 + n];
                 let time = &mut ov.time[k0..k0 + n];
                 let flags = &mut self.flags[k0..k0 + n];
-                for t in 0..n {
-                    let y1 = ul[t] - ur[t];
-                    let up = y1 > max[t];
-                    max[t] = if up { y1 } else { max[t] };
-                    time[t] = if up { self.s.t } else { time[t] };
-                    let turn = (pl[t] - pr[t] > 0.0) & (vl[t] - vr[t] < 0.0);
-                    flags[t] = turn as u8;
-                    turns |= turn;
-                    raised |= up;
+                // By chunks of 4 pairs (fixed width: vectorised), the last chunk ending at the
+                // last pair (overlapping the one before it: a second pass over a pair is a
+                // no-op, it cannot exceed the maximum it just set), scalar below 4 pairs.
+                let w = n.min(4);
+                let mut t0 = 0;
+                while t0 < n {
+                    let t = if t0 + w > n { n - w } else { t0 };
+                    let (tu, ru) = if w == 4 {
+                        let a = |x| arr::<4>(x, t);
+                        overlap_chunk::<4>(
+                            [a(ul), a(ur), a(vl), a(vr), a(pl), a(pr)],
+                            (&mut max[t..t + 4]).try_into().unwrap(),
+                            (&mut time[t..t + 4]).try_into().unwrap(),
+                            (&mut flags[t..t + 4]).try_into().unwrap(),
+                            now,
+                        )
+                    } else {
+                        let a = |x| arr::<1>(x, t);
+                        overlap_chunk::<1>(
+                            [a(ul), a(ur), a(vl), a(vr), a(pl), a(pr)],
+                            (&mut max[t..t + 1]).try_into().unwrap(),
+                            (&mut time[t..t + 1]).try_into().unwrap(),
+                            (&mut flags[t..t + 1]).try_into().unwrap(),
+                            now,
+                        )
+                    };
+                    turns |= tu;
+                    raised |= ru;
+                    t0 += w;
                 }
             }
         }
@@ -314,59 +340,65 @@ impl Stepper<'_> {
             return;
         }
         for k in 0..self.overlaps.pairs.len() {
-            if self.flags[k] == 0 {
-                continue;
+            if self.flags[k] != 0 {
+                self.overlap_extremum(k, len, stored);
             }
-            let (u, ud, up, udp) = (&self.u, &self.ud, &self.u_prev, &self.ud_prev);
-            let op = &self.overlaps.pairs[k];
-            let (l, i, r, j) = (op.left, op.left_dof, op.right, op.right_dof);
-            let (i, j) = (i + 1, j + 1); // the leading zero of the buffers
-            let y1 = u[l][i] - u[r][j];
-            let (y0, yd0, yd1) = (
-                up[l][i] - up[r][j],
-                udp[l][i] - udp[r][j],
-                ud[l][i] - ud[r][j],
-            );
-            let best = self.overlaps.max[k].max(self.overlap_lower[k]);
-            // H ≤ max(y0, y1) + 4/27 len (|ẏ0| + |ẏ1|) (see `interior_extremum`), and the
-            // filter below drops h < best/1.1 (best > 0) or h < best/0.9 (best ≤ 0).
-            let cubic_bound = y0.max(y1) + 4.0 / 27.0 * len * (yd0.abs() + yd1.abs());
-            let bound = cubic_bound + 1e-9 * cubic_bound.abs();
-            if bound + 0.1 * bound.abs() < best {
-                continue;
-            }
-            let Some((th, h)) = peaks::hermite_extremum(y0, yd0, y1, yd1, len) else {
-                continue;
-            };
-            // Cheap filter, as for the peaks: the Hermite error is a small fraction of the
-            // content at the interval's frequencies.
-            if h + 0.1 * h.abs() < best {
-                continue;
-            }
-            let modal = &self.p.modal;
-            for b in [l, r] {
-                if !self.amp_valid[b] {
-                    let range = modal.buildings[b].range.clone();
-                    peaks::amplitudes(modal, &self.amp_k, range, &self.interval, &mut self.obs_amp);
-                    self.amp_valid[b] = true;
-                }
-            }
-            let c = &self.overlap_rows[k];
-            let bound = peaks::hermite_error_bound(modal, 0, c, &self.obs_amp, len);
-            if h + bound < best {
-                continue;
-            }
-            self.overlap_lower[k] = self.overlap_lower[k].max(h - bound);
-            self.overlap_stale = true;
-            let interval =
-                *stored.get_or_insert_with(|| self.deferred.store(&self.interval, self.s.t));
-            self.deferred.candidates.push(Candidate {
-                target: Target::Overlap { pair: k },
-                interval,
-                s0: th * len,
-                upper: h + bound,
-            });
         }
+    }
+
+    /// The rare slow path of overlap pair `k` whose rate turns from + to − over the
+    /// interval of length `len` (see [`Stepper::observe_overlaps`]).
+    #[cold]
+    #[inline(never)]
+    fn overlap_extremum(&mut self, k: usize, len: f64, stored: &mut Option<usize>) {
+        let (u, ud, up, udp) = (&self.u, &self.ud, &self.u_prev, &self.ud_prev);
+        let op = &self.overlaps.pairs[k];
+        let (l, i, r, j) = (op.left, op.left_dof, op.right, op.right_dof);
+        let (i, j) = (i + 1, j + 1); // the leading zero of the buffers
+        let y1 = u[l][i] - u[r][j];
+        let (y0, yd0, yd1) = (
+            up[l][i] - up[r][j],
+            udp[l][i] - udp[r][j],
+            ud[l][i] - ud[r][j],
+        );
+        let best = self.overlaps.max[k].max(self.overlap_lower[k]);
+        // H ≤ max(y0, y1) + 4/27 len (|ẏ0| + |ẏ1|) (see `interior_extremum`), and the
+        // filter below drops h < best/1.1 (best > 0) or h < best/0.9 (best ≤ 0).
+        let cubic_bound = y0.max(y1) + 4.0 / 27.0 * len * (yd0.abs() + yd1.abs());
+        let bound = cubic_bound + 1e-9 * cubic_bound.abs();
+        if bound + 0.1 * bound.abs() < best {
+            return;
+        }
+        let Some((th, h)) = peaks::hermite_extremum(y0, yd0, y1, yd1, len) else {
+            return;
+        };
+        // Cheap filter, as for the peaks: the Hermite error is a small fraction of the
+        // content at the interval's frequencies.
+        if h + 0.1 * h.abs() < best {
+            return;
+        }
+        let modal = &self.p.modal;
+        for b in [l, r] {
+            if !self.amp_valid[b] {
+                let range = modal.buildings[b].range.clone();
+                peaks::amplitudes(modal, &self.amp_k, range, &self.interval, &mut self.obs_amp);
+                self.amp_valid[b] = true;
+            }
+        }
+        let c = &self.overlap_rows[k];
+        let bound = peaks::hermite_error_bound(modal, 0, c, &self.obs_amp, len);
+        if h + bound < best {
+            return;
+        }
+        self.overlap_lower[k] = self.overlap_lower[k].max(h - bound);
+        self.overlap_stale = true;
+        let interval = *stored.get_or_insert_with(|| self.deferred.store(&self.interval, self.s.t));
+        self.deferred.candidates.push(Candidate {
+            target: Target::Overlap { pair: k },
+            interval,
+            s0: th * len,
+            upper: h + bound,
+        });
     }
 
     /// Refines the deferred candidates (see [`peaks::Deferred`]) into the exact peaks and
@@ -445,6 +477,41 @@ impl Stepper<'_> {
     }
 }
 
+/// `x[t..t + W]` as an array.
+#[inline(always)]
+fn arr<const W: usize>(x: &[f64], t: usize) -> &[f64; W] {
+    x[t..t + W].try_into().unwrap()
+}
+
+/// One chunk of W consecutive overlap pairs (see [`Stepper::observe_overlaps`]): `v` holds
+/// u, u̇ of the left and the right floors, then the previous u̇ of both; the running maxima
+/// and their times, the turn flags. Returns (some rate turns, some maximum was raised).
+#[inline(always)]
+fn overlap_chunk<const W: usize>(
+    v: [&[f64; W]; 6],
+    max: &mut [f64; W],
+    time: &mut [f64; W],
+    flags: &mut [u8; W],
+    now: f64,
+) -> (bool, bool) {
+    let [ul, ur, vl, vr, pl, pr] = v;
+    let (mx0, tm0) = (*max, *time);
+    let (mut mx, mut tm, mut fl) = ([0.0; W], [0.0; W], [0u8; W]);
+    let (mut turns, mut raised) = (false, false);
+    for l in 0..W {
+        let y1 = ul[l] - ur[l];
+        let up = y1 > mx0[l];
+        mx[l] = if up { y1 } else { mx0[l] };
+        tm[l] = if up { now } else { tm0[l] };
+        let turn = (pl[l] - pr[l] > 0.0) & (vl[l] - vr[l] < 0.0);
+        fl[l] = turn as u8;
+        turns |= turn;
+        raised |= up;
+    }
+    (*max, *time, *flags) = (mx, tm, fl);
+    (turns, raised)
+}
+
 /// 2E = Σ_n (q̇_n² + ω_n² q_n²) over the modes `r` (four partial sums over chunks of 4
 /// modes from the range start, the tail into the first; the order does not matter for the
 /// bounds that use it, whose margins cover the round-off).
@@ -480,39 +547,25 @@ fn cubic_bound(y0: f64, yd0: f64, y1: f64, yd1: f64, c: f64) -> f64 {
 struct Sample<'s> {
     u: &'s [f64],
     ud: &'s [f64],
-    up: &'s [f64],
     udp: &'s [f64],
     k: &'s [f64],
-    disp_lower: &'s [f64],
-    shear_lower: &'s [f64],
 }
 
-/// The sample of one building, branch-free over its (padded) floors so that it vectorises:
-/// the running peaks of |u_i| and |V_i| = |k_i (u_i − u_{i−1})| (`dm`, `sm`), and whether
-/// any quantity needs the slow path of [`Stepper::interior_extremum`] (its rate changes sign
-/// over the interval of length `len` > 0 and the cubic bound reaches 90 % of its peak).
-/// Returns (a peak was raised, a quantity is flagged); `flags` receives one byte per
-/// displacement then one per shear (1: flagged). The padding floors are zeros and never
-/// raise or flag anything.
+/// The sample of one building, branch-free over its (padded) floors by chunks of 4 so that
+/// it vectorises: the running peaks of |u_i| and |V_i| = |k_i (u_i − u_{i−1})| (`dm`,
+/// `sm`), and which quantities' rates ẏ change sign over the interval (rare: only those
+/// may have an interior extremum, [`Stepper::interior_extremum`]). `masks` receives one
+/// byte per chunk of 4 floors: bit l for the displacement of floor 4c + l, bit 4 + l for
+/// its story shear. Returns (a peak was raised, some rate changes sign). The padding floors
+/// are zeros and never raise or flag anything.
 #[inline(always)]
-fn sample(
-    s: Sample<'_>,
-    dm: &mut [f64],
-    sm: &mut [f64],
-    flags: &mut [u8],
-    len: f64,
-) -> (bool, bool) {
+fn sample(s: Sample<'_>, dm: &mut [f64], sm: &mut [f64], flags: &mut [u8]) -> (bool, bool) {
     let n = dm.len();
     let (u, below) = (&s.u[1..=n], &s.u[..n]);
     let (ud, vbelow) = (&s.ud[1..=n], &s.ud[..n]);
-    let (up, below_p) = (&s.up[1..=n], &s.up[..n]);
     let (udp, vbelow_p) = (&s.udp[1..=n], &s.udp[..n]);
-    let (k, dl, sl, sm) = (
-        &s.k[..n],
-        &s.disp_lower[..n],
-        &s.shear_lower[..n],
-        &mut sm[..n],
-    );
+    let (k, sm) = (&s.k[..n], &mut sm[..n]);
+    let (fd, fs) = flags[..2 * n].split_at_mut(n);
     let mut raised = false;
     let mut turns = false;
     for i in 0..n {
@@ -522,28 +575,12 @@ fn sample(
         let vs = (k[i] * (u[i] - below[i])).abs();
         raised |= vs > sm[i];
         sm[i] = if vs > sm[i] { vs } else { sm[i] };
-        // A rate that changes sign over the interval (rare): the filter below runs only then.
+        // A rate that changes sign over the interval (rare): the slow path runs only then.
         let (r0, r1) = (k[i] * (udp[i] - vbelow_p[i]), k[i] * (ud[i] - vbelow[i]));
-        turns |= (udp[i] * ud[i] < 0.0) | (r0 * r1 < 0.0);
+        let (td, ts) = (udp[i] * ud[i] < 0.0, r0 * r1 < 0.0);
+        fd[i] = td as u8;
+        fs[i] = ts as u8;
+        turns |= td | ts;
     }
-    if !(len > 0.0) || !turns {
-        return (raised, false);
-    }
-    let c = 4.0 / 27.0 * len;
-    let (fd, fs) = flags[..2 * n].split_at_mut(n);
-    let mut flagged = false;
-    for i in 0..n {
-        let (y0, yd0, y1, yd1) = (up[i], udp[i], u[i], ud[i]);
-        let peak = dm[i].max(dl[i]);
-        let f = (yd0 * yd1 < 0.0) & !(cubic_bound(y0, yd0, y1, yd1, c) * (1.0 + 1e-9) < 0.9 * peak);
-        fd[i] = f as u8;
-        flagged |= f;
-        let (y0, yd0) = (k[i] * (up[i] - below_p[i]), k[i] * (udp[i] - vbelow_p[i]));
-        let (y1, yd1) = (k[i] * (u[i] - below[i]), k[i] * (ud[i] - vbelow[i]));
-        let peak = sm[i].max(sl[i]);
-        let f = (yd0 * yd1 < 0.0) & !(cubic_bound(y0, yd0, y1, yd1, c) * (1.0 + 1e-9) < 0.9 * peak);
-        fs[i] = f as u8;
-        flagged |= f;
-    }
-    (raised, flagged)
+    (raised, turns)
 }
