@@ -34,9 +34,11 @@ impl Stepper<'_> {
         let mut stored: Option<usize> = None;
         let nb = self.p.modal.buildings.len();
         let skip_overlaps = self.envelope(len);
+        let mut all = true;
         for b in 0..nb {
             if self.skip[b] {
                 self.prev_valid[b] = false;
+                all = false;
                 continue;
             }
             let bm = &self.p.modal.buildings[b];
@@ -96,25 +98,50 @@ impl Stepper<'_> {
                 continue;
             }
             self.env_stale[b] = false;
-            let (inv_d, inv_s) = self.env_inv[b][..2 * nf].split_at(nf);
-            let (dm, dl) = (&self.disp_max[b][..nf], &self.disp_lower[b][..nf]);
-            let (sm, sl) = (&self.shear_max[b][..nf], &self.shear_lower[b][..nf]);
-            let mut thr = f64::INFINITY;
-            for i in 0..nf {
-                let (pd, ps) = (dm[i].max(dl[i]) * inv_d[i], sm[i].max(sl[i]) * inv_s[i]);
-                thr = thr.min(pd).min(ps);
+            // Four running minima over the padded floors (a padding floor's 0 · ∞ = NaN is
+            // never below one), then the least of them: the minimum of the same values.
+            let pf = self.disp_max[b].len();
+            let (inv_d, inv_s) = self.env_inv[b][..2 * pf].split_at(pf);
+            let (dm, dl) = (&self.disp_max[b][..pf], &self.disp_lower[b][..pf]);
+            let (sm, sl) = (&self.shear_max[b][..pf], &self.shear_lower[b][..pf]);
+            let mut acc = [f64::INFINITY; 4];
+            fn c4(x: &[f64]) -> std::slice::ChunksExact<'_, f64> {
+                x.chunks_exact(4)
             }
+            for (((((dm, dl), sm), sl), id), is) in c4(dm)
+                .zip(c4(dl))
+                .zip(c4(sm))
+                .zip(c4(sl))
+                .zip(c4(inv_d))
+                .zip(c4(inv_s))
+            {
+                for l in 0..4 {
+                    let pd = if dm[l] > dl[l] { dm[l] } else { dl[l] } * id[l];
+                    let ps = if sm[l] > sl[l] { sm[l] } else { sl[l] } * is[l];
+                    acc[l] = if pd < acc[l] { pd } else { acc[l] };
+                    acc[l] = if ps < acc[l] { ps } else { acc[l] };
+                }
+            }
+            let least = |a: f64, b: f64| if b < a { b } else { a };
+            let thr = least(least(acc[0], acc[1]), least(acc[2], acc[3]));
             self.env_thr[b] = thr;
         }
         if !self.overlaps.is_empty() && !skip_overlaps {
             self.observe_overlaps(len, &mut stored);
         }
-        for b in 0..nb {
-            if !self.skip[b] {
-                // The current sample becomes the previous one (buffers exchanged).
-                std::mem::swap(&mut self.u_prev[b], &mut self.u[b]);
-                std::mem::swap(&mut self.ud_prev[b], &mut self.ud[b]);
-                self.prev_valid[b] = true;
+        // The current sample becomes the previous one (buffers exchanged; all at once when
+        // every building was observed).
+        if all {
+            std::mem::swap(&mut self.u_prev, &mut self.u);
+            std::mem::swap(&mut self.ud_prev, &mut self.ud);
+            self.prev_valid.fill(true);
+        } else {
+            for b in 0..nb {
+                if !self.skip[b] {
+                    std::mem::swap(&mut self.u_prev[b], &mut self.u[b]);
+                    std::mem::swap(&mut self.ud_prev[b], &mut self.ud[b]);
+                    self.prev_valid[b] = true;
+                }
             }
         }
         if self.history.is_some() {
@@ -127,8 +154,8 @@ impl Stepper<'_> {
     /// whether the overlap audit can be skipped too.
     #[inline(always)]
     fn envelope(&mut self, len: f64) -> bool {
-        self.skip.fill(false);
         if !(len > 0.0) || self.history.is_some() || self.interval.fc.is_some() {
+            self.skip.fill(false);
             self.env_e2_fresh = false;
             return false;
         }

@@ -134,7 +134,8 @@ pub struct Stepper<'a> {
     pub(super) amp_valid: Vec<bool>,
     pub(super) amp_k: Vec<[f64; 3]>,
     /// Energy envelope of the observation ([`super::observe`]): per building, the inverse
-    /// flexibility norms 1/f_y of its floor displacements then story shears
+    /// flexibility norms 1/f_y of its floor displacements then story shears (each padded
+    /// with ∞ to the padded floors)
     /// (f_y = √(Σ_n c_n²/ω_n²), m/√J resp. N/√J), ‖Γ_b‖ (kg^½), the envelope threshold
     /// min_y peak_y/f_y (√J; 0 until the first observation) and whether the previous
     /// sample was observed (else u_prev, u̇_prev are rebuilt from the interval start).
@@ -414,7 +415,9 @@ impl<'a> Stepper<'a> {
                 });
                 let shear =
                     (0..nf).map(|i| inv_f(&st.shear_rows[b][i * nmb..(i + 1) * nmb], first));
-                disp.chain(shear).collect()
+                // Padded floors: ∞ (their 0 · ∞ = NaN is never below the minimum).
+                let pad = || std::iter::repeat_n(f64::INFINITY, bm.padded_floors() - nf);
+                disp.chain(pad()).chain(shear).chain(pad()).collect()
             })
             .collect();
         st.overlap_inv = st.overlap_rows.iter().map(|r| inv_f(r, 0)).collect();
