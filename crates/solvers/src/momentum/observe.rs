@@ -587,27 +587,45 @@ struct Sample<'s> {
 /// are zeros and never raise or flag anything.
 #[inline(always)]
 fn sample(s: Sample<'_>, dm: &mut [f64], sm: &mut [f64], flags: &mut [u8]) -> (bool, bool) {
-    let n = dm.len();
+    let n = dm.len() / 4 * 4;
     let (u, below) = (&s.u[1..=n], &s.u[..n]);
     let (ud, vbelow) = (&s.ud[1..=n], &s.ud[..n]);
     let (udp, vbelow_p) = (&s.udp[1..=n], &s.udp[..n]);
-    let (k, sm) = (&s.k[..n], &mut sm[..n]);
+    let (k, dm, sm) = (&s.k[..n], &mut dm[..n], &mut sm[..n]);
     let (fd, fs) = flags[..2 * n].split_at_mut(n);
-    let mut raised = false;
-    let mut turns = false;
-    for i in 0..n {
-        let d = u[i].abs();
-        raised |= d > dm[i];
-        dm[i] = if d > dm[i] { d } else { dm[i] };
-        let vs = (k[i] * (u[i] - below[i])).abs();
-        raised |= vs > sm[i];
-        sm[i] = if vs > sm[i] { vs } else { sm[i] };
-        // A rate that changes sign over the interval (rare): the slow path runs only then.
-        let (r0, r1) = (k[i] * (udp[i] - vbelow_p[i]), k[i] * (ud[i] - vbelow[i]));
-        let (td, ts) = (udp[i] * ud[i] < 0.0, r0 * r1 < 0.0);
-        fd[i] = td as u8;
-        fs[i] = ts as u8;
-        turns |= td | ts;
+    let mut raised = [false; 4];
+    let mut turns = [false; 4];
+    // By chunks of 4 floors (fixed width, whole chunks read and written: vectorised).
+    for c in 0..n / 4 {
+        let i0 = 4 * c;
+        let (u, below, ud, vbelow) = (
+            arr::<4>(u, i0),
+            arr::<4>(below, i0),
+            arr::<4>(ud, i0),
+            arr::<4>(vbelow, i0),
+        );
+        let (udp, vbelow_p, k) = (arr::<4>(udp, i0), arr::<4>(vbelow_p, i0), arr::<4>(k, i0));
+        let (dm0, sm0) = (*arr::<4>(dm, i0), *arr::<4>(sm, i0));
+        let (mut dm1, mut sm1, mut fd1, mut fs1) = ([0.0; 4], [0.0; 4], [0u8; 4], [0u8; 4]);
+        for l in 0..4 {
+            let d = u[l].abs();
+            raised[l] |= d > dm0[l];
+            dm1[l] = if d > dm0[l] { d } else { dm0[l] };
+            let vs = (k[l] * (u[l] - below[l])).abs();
+            raised[l] |= vs > sm0[l];
+            sm1[l] = if vs > sm0[l] { vs } else { sm0[l] };
+            // A rate that changes sign over the interval (rare): the slow path runs only then.
+            let (r0, r1) = (k[l] * (udp[l] - vbelow_p[l]), k[l] * (ud[l] - vbelow[l]));
+            let (td, ts) = (udp[l] * ud[l] < 0.0, r0 * r1 < 0.0);
+            fd1[l] = td as u8;
+            fs1[l] = ts as u8;
+            turns[l] |= td | ts;
+        }
+        dm[i0..i0 + 4].copy_from_slice(&dm1);
+        sm[i0..i0 + 4].copy_from_slice(&sm1);
+        fd[i0..i0 + 4].copy_from_slice(&fd1);
+        fs[i0..i0 + 4].copy_from_slice(&fs1);
     }
-    (raised, turns)
+    let any = |m: [bool; 4]| (m[0] | m[1]) | (m[2] | m[3]);
+    (any(raised), any(turns))
 }
