@@ -316,58 +316,14 @@ impl Stepper<'_> {
     fn observe_overlaps(&mut self, len: f64, stored: &mut Option<usize>) {
         // First pass, every pair: the sample (a running maximum, branch-free) and whether the
         // rate turns from + to − over the interval (rare: only those go on).
-        let (mut turns, mut raised) = (false, false);
-        {
-            let (u, ud, udp) = (&self.u, &self.ud, &self.ud_prev);
-            let now = self.s.t;
-            let ov = &mut self.overlaps;
-            for run in &self.overlap_runs {
-                let (n, k0) = (run.n, run.k0);
-                let (i0, j0) = (run.i0 + 1, run.j0 + 1); // the leading zero of the buffers
-                let (ul, ur) = (&u[run.left][i0..i0 + n], &u[run.right][j0..j0 + n]);
-                let (vl, vr) = (&ud[run.left][i0..i0 + n], &ud[run.right][j0..j0 + n]);
-                let (pl, pr) = (&udp[run.left][i0..i0 + n], &udp[run.right][j0..j0 + n]);
-                let max = &mut ov.max[k0..k0 + n];
-                let time = &mut ov.time[k0..k0 + n];
-                let flags = &mut self.flags[k0..k0 + n];
-                // By chunks of 4 pairs (fixed width: vectorised), the last chunk ending at the
-                // last pair (overlapping the one before it: a second pass over a pair is a
-                // no-op, it cannot exceed the maximum it just set), scalar below 4 pairs.
-                let w = n.min(4);
-                let mut t0 = 0;
-                while t0 < n {
-                    let t = if t0 + w > n { n - w } else { t0 };
-                    let (tu, ru) = if w == 4 {
-                        let a = |x| arr::<4>(x, t);
-                        overlap_chunk::<4>(
-                            [a(ul), a(ur), a(vl), a(vr), a(pl), a(pr)],
-                            (&mut max[t..t + 4]).try_into().unwrap(),
-                            (&mut time[t..t + 4]).try_into().unwrap(),
-                            (&mut flags[t..t + 4]).try_into().unwrap(),
-                            now,
-                        )
-                    } else {
-                        let a = |x| arr::<1>(x, t);
-                        overlap_chunk::<1>(
-                            [a(ul), a(ur), a(vl), a(vr), a(pl), a(pr)],
-                            (&mut max[t..t + 1]).try_into().unwrap(),
-                            (&mut time[t..t + 1]).try_into().unwrap(),
-                            (&mut flags[t..t + 1]).try_into().unwrap(),
-                            now,
-                        )
-                    };
-                    turns |= tu;
-                    raised |= ru;
-                    t0 += w;
-                }
-            }
-        }
+        let arch = self.arch;
+        let (turns, raised) = arch.dispatch(OverlapPass { st: self });
         self.overlap_stale |= raised;
         if !(len > 0.0) || !turns {
             return;
         }
         for k in 0..self.overlaps.pairs.len() {
-            if self.flags[k] != 0 {
+            if self.overlap_turn[k] != 0.0 {
                 self.overlap_extremum(k, len, stored);
             }
         }
@@ -510,33 +466,85 @@ fn arr<const W: usize>(x: &[f64], t: usize) -> &[f64; W] {
     x[t..t + W].try_into().unwrap()
 }
 
-/// One chunk of W consecutive overlap pairs (see [`Stepper::observe_overlaps`]): `v` holds
-/// u, u̇ of the left and the right floors, then the previous u̇ of both; the running maxima
-/// and their times, the turn flags. Returns (some rate turns, some maximum was raised).
-#[inline(always)]
-fn overlap_chunk<const W: usize>(
-    v: [&[f64; W]; 6],
-    max: &mut [f64; W],
-    time: &mut [f64; W],
-    flags: &mut [u8; W],
-    now: f64,
-) -> (bool, bool) {
-    let [ul, ur, vl, vr, pl, pr] = v;
-    let (mx0, tm0) = (*max, *time);
-    let (mut mx, mut tm, mut fl) = ([0.0; W], [0.0; W], [0u8; W]);
-    let (mut turns, mut raised) = (false, false);
-    for l in 0..W {
-        let y1 = ul[l] - ur[l];
-        let up = y1 > mx0[l];
-        mx[l] = if up { y1 } else { mx0[l] };
-        tm[l] = if up { now } else { tm0[l] };
-        let turn = (pl[l] - pr[l] > 0.0) & (vl[l] - vr[l] < 0.0);
-        fl[l] = turn as u8;
-        turns |= turn;
-        raised |= up;
+/// The first pass of the overlap audit over every pair (see [`Stepper::observe_overlaps`]),
+/// in vectors of the widest instruction set: the running maxima (and their times) of
+/// u_left − u_right, and whether each pair's rate turns from + to − over the interval
+/// (`overlap_turn`: 1 or 0). Returns (some rate turns, some maximum was raised).
+struct OverlapPass<'s, 'a> {
+    st: &'s mut Stepper<'a>,
+}
+
+impl pulp::WithSimd for OverlapPass<'_, '_> {
+    type Output = (bool, bool);
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, simd: S) -> (bool, bool) {
+        let st = self.st;
+        let (u, ud, udp) = (&st.u, &st.ud, &st.ud_prev);
+        let now = st.s.t;
+        let ov = &mut st.overlaps;
+        let (zero, one, nowv) = (
+            simd.splat_f64s(0.0),
+            simd.splat_f64s(1.0),
+            simd.splat_f64s(now),
+        );
+        let (mut tv, mut rv) = (
+            simd.less_than_f64s(one, zero),
+            simd.less_than_f64s(one, zero),
+        );
+        let (mut turns, mut raised) = (false, false);
+        for run in &st.overlap_runs {
+            let (n, k0) = (run.n, run.k0);
+            let (i0, j0) = (run.i0 + 1, run.j0 + 1); // the leading zero of the buffers
+            let (ul, ur) = (&u[run.left][i0..i0 + n], &u[run.right][j0..j0 + n]);
+            let (vl, vr) = (&ud[run.left][i0..i0 + n], &ud[run.right][j0..j0 + n]);
+            let (pl, pr) = (&udp[run.left][i0..i0 + n], &udp[run.right][j0..j0 + n]);
+            let (max, mt) = S::as_mut_simd_f64s(&mut ov.max[k0..k0 + n]);
+            let (time, tt) = S::as_mut_simd_f64s(&mut ov.time[k0..k0 + n]);
+            let (flag, ft) = S::as_mut_simd_f64s(&mut st.overlap_turn[k0..k0 + n]);
+            let (ul, ult) = S::as_simd_f64s(ul);
+            let (ur, urt) = S::as_simd_f64s(ur);
+            let (vl, vlt) = S::as_simd_f64s(vl);
+            let (vr, vrt) = S::as_simd_f64s(vr);
+            let (pl, plt) = S::as_simd_f64s(pl);
+            let (pr, prt) = S::as_simd_f64s(pr);
+            for ((((((((max, time), flag), ul), ur), vl), vr), pl), pr) in max
+                .iter_mut()
+                .zip(time.iter_mut())
+                .zip(flag.iter_mut())
+                .zip(ul)
+                .zip(ur)
+                .zip(vl)
+                .zip(vr)
+                .zip(pl)
+                .zip(pr)
+            {
+                let y1 = simd.sub_f64s(*ul, *ur);
+                let up = simd.greater_than_f64s(y1, *max);
+                *max = simd.select_f64s(up, y1, *max);
+                *time = simd.select_f64s(up, nowv, *time);
+                let turn = simd.and_m64s(
+                    simd.greater_than_f64s(simd.sub_f64s(*pl, *pr), zero),
+                    simd.less_than_f64s(simd.sub_f64s(*vl, *vr), zero),
+                );
+                *flag = simd.select_f64s(turn, one, zero);
+                tv = simd.or_m64s(tv, turn);
+                rv = simd.or_m64s(rv, up);
+            }
+            for t in 0..mt.len() {
+                let y1 = ult[t] - urt[t];
+                let up = y1 > mt[t];
+                mt[t] = if up { y1 } else { mt[t] };
+                tt[t] = if up { now } else { tt[t] };
+                let turn = (plt[t] - prt[t] > 0.0) & (vlt[t] - vrt[t] < 0.0);
+                ft[t] = if turn { 1.0 } else { 0.0 };
+                turns |= turn;
+                raised |= up;
+            }
+        }
+        let any = |m| simd.reduce_max_f64s(simd.select_f64s(m, one, zero)) > 0.0;
+        (turns | any(tv), raised | any(rv))
     }
-    (*max, *time, *flags) = (mx, tm, fl);
-    (turns, raised)
 }
 
 /// 2E = Σ_n (q̇_n² + ω_n² q_n²) over the modes `r` (four partial sums over chunks of 4

@@ -162,6 +162,8 @@ pub struct Stepper<'a> {
     /// positive one yet), recomputed when a maximum or a lower bound grew (`overlap_stale`).
     pub(super) overlap_lim: Vec<f64>,
     pub(super) overlap_stale: bool,
+    /// Per overlap pair: its rate turned from + to − over the interval (1) or not (0).
+    pub(super) overlap_turn: Vec<f64>,
 }
 
 /// Pairs `k0 .. k0 + n` of the overlap audit: floors `i0 + t` of building `left` against
@@ -321,6 +323,7 @@ impl<'a> Stepper<'a> {
             overlap_runs: Vec::new(),
             overlap_lim: Vec::new(),
             overlap_stale: true,
+            overlap_turn: Vec::new(),
             coef: vec![
                 0.0;
                 p.modal
@@ -386,6 +389,7 @@ impl<'a> Stepper<'a> {
             }
         }
         st.overlap_lim = vec![0.0; st.overlap_runs.len()];
+        st.overlap_turn = vec![0.0; st.overlaps.pairs.len()];
         let widest = p.modal.buildings.iter().map(|b| b.padded_floors()).max();
         st.flags = vec![0; (2 * widest.unwrap_or(0)).max(st.overlaps.pairs.len())];
         let w2 = &p.omega2;
