@@ -73,18 +73,15 @@ impl Stepper<'_> {
                 // `interior_extremum`.
                 let n = self.disp_max[b].len();
                 for i0 in (0..n).step_by(4) {
+                    // The 8 flags of floors i0 … i0 + 3 as bits 8l (displacement of floor
+                    // i0 + l) and 8l + 1 (its story shear): in increasing bit order.
                     let word =
-                        |f: &[u8], o: usize| u32::from_ne_bytes(f[o..o + 4].try_into().unwrap());
-                    if word(&self.flags, i0) | word(&self.flags, n + i0) == 0 {
-                        continue;
-                    }
-                    for i in i0..i0 + 4 {
-                        if self.flags[i] != 0 {
-                            self.interior_extremum(b, i, false, len, &mut stored);
-                        }
-                        if self.flags[n + i] != 0 {
-                            self.interior_extremum(b, i, true, len, &mut stored);
-                        }
+                        |o: usize| u32::from_le_bytes(self.flags[o..o + 4].try_into().unwrap());
+                    let mut m = word(i0) as u64 | (word(n + i0) as u64) << 1;
+                    while m != 0 {
+                        let t = m.trailing_zeros() as usize;
+                        m &= m - 1;
+                        self.interior_extremum(b, i0 + t / 8, t % 8 == 1, len, &mut stored);
                     }
                 }
             }
