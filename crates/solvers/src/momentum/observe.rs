@@ -26,9 +26,26 @@ use super::peaks::{self, Candidate, Target};
 use super::stepper::Stepper;
 
 impl Stepper<'_> {
-    /// Observes the current instant (see module docs).
+    /// Observes the current instant (see module docs), in vectors of the widest instruction
+    /// set ([`pulp::Arch`]; exact operations only, so bit-identical on every machine).
     #[inline(always)]
     pub(super) fn observe(&mut self) {
+        struct Op<'s, 'a> {
+            st: &'s mut Stepper<'a>,
+        }
+        impl pulp::WithSimd for Op<'_, '_> {
+            type Output = ();
+            #[inline(always)]
+            fn with_simd<S: pulp::Simd>(self, simd: S) {
+                self.st.observe_with(simd)
+            }
+        }
+        let arch = self.arch;
+        arch.dispatch(Op { st: self })
+    }
+
+    #[inline(always)]
+    fn observe_with<S: pulp::Simd>(&mut self, simd: S) {
         let len = self.interval.tau_done;
         self.amp_valid.fill(false);
         let mut stored: Option<usize> = None;
@@ -56,6 +73,7 @@ impl Stepper<'_> {
                 &mut self.ud[b][1..],
             );
             let (raised, turns) = sample(
+                simd,
                 Sample {
                     u: &self.u[b],
                     ud: &self.ud[b],
@@ -73,15 +91,18 @@ impl Stepper<'_> {
                 // `interior_extremum`.
                 let n = self.disp_max[b].len();
                 for i0 in (0..n).step_by(4) {
-                    // The 8 flags of floors i0 … i0 + 3 as bits 8l (displacement of floor
-                    // i0 + l) and 8l + 1 (its story shear): in increasing bit order.
-                    let word =
-                        |o: usize| u32::from_le_bytes(self.flags[o..o + 4].try_into().unwrap());
-                    let mut m = word(i0) as u64 | (word(n + i0) as u64) << 1;
-                    while m != 0 {
-                        let t = m.trailing_zeros() as usize;
-                        m &= m - 1;
-                        self.interior_extremum(b, i0 + t / 8, t % 8 == 1, len, &mut stored);
+                    let (d, s) = (arr::<4>(&self.flags, i0), arr::<4>(&self.flags, n + i0));
+                    let bits = |a: &[f64; 4]| a.iter().fold(0, |m, x| m | x.to_bits());
+                    if bits(d) | bits(s) == 0 {
+                        continue;
+                    }
+                    for i in i0..i0 + 4 {
+                        if self.flags[i] != 0.0 {
+                            self.interior_extremum(b, i, false, len, &mut stored);
+                        }
+                        if self.flags[n + i] != 0.0 {
+                            self.interior_extremum(b, i, true, len, &mut stored);
+                        }
                     }
                 }
             }
@@ -124,7 +145,7 @@ impl Stepper<'_> {
             self.env_thr[b] = thr;
         }
         if !self.overlaps.is_empty() && !skip_overlaps {
-            self.observe_overlaps(len, &mut stored);
+            self.observe_overlaps(simd, len, &mut stored);
         }
         // The current sample becomes the previous one (buffers exchanged; all at once when
         // every building was observed).
@@ -310,11 +331,10 @@ impl Stepper<'_> {
     /// story-shear and displacement peaks are (Hermite estimate, cheap filter, rigorous
     /// Hermite error bound over both buildings' modes, deferred refinement).
     #[inline(always)]
-    fn observe_overlaps(&mut self, len: f64, stored: &mut Option<usize>) {
+    fn observe_overlaps<S: pulp::Simd>(&mut self, simd: S, len: f64, stored: &mut Option<usize>) {
         // First pass, every pair: the sample (a running maximum, branch-free) and whether the
         // rate turns from + to − over the interval (rare: only those go on).
-        let arch = self.arch;
-        let (turns, raised) = arch.dispatch(OverlapPass { st: self });
+        let (turns, raised) = pulp::WithSimd::with_simd(OverlapPass { st: self }, simd);
         self.overlap_stale |= raised;
         if !(len > 0.0) || !turns {
             return;
@@ -539,8 +559,7 @@ impl pulp::WithSimd for OverlapPass<'_, '_> {
                 raised |= up;
             }
         }
-        let any = |m| simd.reduce_max_f64s(simd.select_f64s(m, one, zero)) > 0.0;
-        (turns | any(tv), raised | any(rv))
+        (turns | any(simd, tv), raised | any(simd, rv))
     }
 }
 
@@ -583,54 +602,84 @@ struct Sample<'s> {
     k: &'s [f64],
 }
 
-/// The sample of one building, branch-free over its (padded) floors by chunks of 4 so that
-/// it vectorises: the running peaks of |u_i| and |V_i| = |k_i (u_i − u_{i−1})| (`dm`,
-/// `sm`), and which quantities' rates ẏ change sign over the interval (rare: only those
-/// may have an interior extremum, [`Stepper::interior_extremum`]). `masks` receives one
-/// byte per chunk of 4 floors: bit l for the displacement of floor 4c + l, bit 4 + l for
-/// its story shear. Returns (a peak was raised, some rate changes sign). The padding floors
-/// are zeros and never raise or flag anything.
+/// The sample of one building, branch-free over its (padded) floors in vectors of `simd`:
+/// the running peaks of |u_i| and |V_i| = |k_i (u_i − u_{i−1})| (`dm`, `sm`), and which
+/// quantities' rates ẏ change sign over the interval (rare: only those may have an interior
+/// extremum, [`Stepper::interior_extremum`]): `turn` receives −1 (turns) or 0 per floor
+/// displacement, then per story shear. Returns (a peak was raised, some rate changes sign).
+/// The padding floors are zeros and never raise or flag anything.
 #[inline(always)]
-fn sample(s: Sample<'_>, dm: &mut [f64], sm: &mut [f64], flags: &mut [u8]) -> (bool, bool) {
-    let n = dm.len() / 4 * 4;
-    let (u, below) = (&s.u[1..=n], &s.u[..n]);
-    let (ud, vbelow) = (&s.ud[1..=n], &s.ud[..n]);
-    let (udp, vbelow_p) = (&s.udp[1..=n], &s.udp[..n]);
-    let (k, dm, sm) = (&s.k[..n], &mut dm[..n], &mut sm[..n]);
-    let (fd, fs) = flags[..2 * n].split_at_mut(n);
-    let mut raised = [false; 4];
-    let mut turns = [false; 4];
-    // By chunks of 4 floors (fixed width, whole chunks read and written: vectorised).
-    for c in 0..n / 4 {
-        let i0 = 4 * c;
-        let (u, below, ud, vbelow) = (
-            arr::<4>(u, i0),
-            arr::<4>(below, i0),
-            arr::<4>(ud, i0),
-            arr::<4>(vbelow, i0),
-        );
-        let (udp, vbelow_p, k) = (arr::<4>(udp, i0), arr::<4>(vbelow_p, i0), arr::<4>(k, i0));
-        let (dm0, sm0) = (*arr::<4>(dm, i0), *arr::<4>(sm, i0));
-        let (mut dm1, mut sm1, mut fd1, mut fs1) = ([0.0; 4], [0.0; 4], [0u8; 4], [0u8; 4]);
-        for l in 0..4 {
-            let d = u[l].abs();
-            raised[l] |= d > dm0[l];
-            dm1[l] = if d > dm0[l] { d } else { dm0[l] };
-            let vs = (k[l] * (u[l] - below[l])).abs();
-            raised[l] |= vs > sm0[l];
-            sm1[l] = if vs > sm0[l] { vs } else { sm0[l] };
-            // A rate that changes sign over the interval (rare): the slow path runs only then.
-            let (r0, r1) = (k[l] * (udp[l] - vbelow_p[l]), k[l] * (ud[l] - vbelow[l]));
-            let (td, ts) = (udp[l] * ud[l] < 0.0, r0 * r1 < 0.0);
-            fd1[l] = td as u8;
-            fs1[l] = ts as u8;
-            turns[l] |= td | ts;
-        }
-        dm[i0..i0 + 4].copy_from_slice(&dm1);
-        sm[i0..i0 + 4].copy_from_slice(&sm1);
-        fd[i0..i0 + 4].copy_from_slice(&fd1);
-        fs[i0..i0 + 4].copy_from_slice(&fs1);
+fn sample<S: pulp::Simd>(
+    simd: S,
+    s: Sample<'_>,
+    dm: &mut [f64],
+    sm: &mut [f64],
+    turn: &mut [f64],
+) -> (bool, bool) {
+    let n = dm.len();
+    let (td, ts) = turn[..2 * n].split_at_mut(n);
+    let (dm, dmt) = S::as_mut_simd_f64s(dm);
+    let (sm, smt) = S::as_mut_simd_f64s(&mut sm[..n]);
+    let (td, tdt) = S::as_mut_simd_f64s(td);
+    let (ts, tst) = S::as_mut_simd_f64s(ts);
+    let (u, ut) = S::as_simd_f64s(&s.u[1..=n]);
+    let (below, belowt) = S::as_simd_f64s(&s.u[..n]);
+    let (ud, udt) = S::as_simd_f64s(&s.ud[1..=n]);
+    let (vbelow, vbelowt) = S::as_simd_f64s(&s.ud[..n]);
+    let (udp, udpt) = S::as_simd_f64s(&s.udp[1..=n]);
+    let (pbelow, pbelowt) = S::as_simd_f64s(&s.udp[..n]);
+    let (k, kt) = S::as_simd_f64s(&s.k[..n]);
+    let m = dm.len();
+    let (sm, td, ts) = (&mut sm[..m], &mut td[..m], &mut ts[..m]);
+    let (u, below, ud, vbelow) = (&u[..m], &below[..m], &ud[..m], &vbelow[..m]);
+    let (udp, pbelow, k) = (&udp[..m], &pbelow[..m], &k[..m]);
+    let (zero, one) = (simd.splat_f64s(0.0), simd.splat_f64s(1.0));
+    let mone = simd.splat_f64s(-1.0);
+    let (mut rv, mut tv) = (
+        simd.less_than_f64s(one, zero),
+        simd.less_than_f64s(one, zero),
+    );
+    for i in 0..m {
+        let d = simd.abs_f64s(u[i]);
+        let up = simd.greater_than_f64s(d, dm[i]);
+        dm[i] = simd.select_f64s(up, d, dm[i]);
+        let vs = simd.abs_f64s(simd.mul_f64s(k[i], simd.sub_f64s(u[i], below[i])));
+        let us = simd.greater_than_f64s(vs, sm[i]);
+        sm[i] = simd.select_f64s(us, vs, sm[i]);
+        rv = simd.or_m64s(rv, simd.or_m64s(up, us));
+        // A rate that changes sign over the interval (rare): the slow path runs only then.
+        let r0 = simd.mul_f64s(k[i], simd.sub_f64s(udp[i], pbelow[i]));
+        let r1 = simd.mul_f64s(k[i], simd.sub_f64s(ud[i], vbelow[i]));
+        let d_turn = simd.less_than_f64s(simd.mul_f64s(udp[i], ud[i]), zero);
+        let s_turn = simd.less_than_f64s(simd.mul_f64s(r0, r1), zero);
+        td[i] = simd.select_f64s(d_turn, mone, zero);
+        ts[i] = simd.select_f64s(s_turn, mone, zero);
+        tv = simd.or_m64s(tv, simd.or_m64s(d_turn, s_turn));
     }
-    let any = |m: [bool; 4]| (m[0] | m[1]) | (m[2] | m[3]);
-    (any(raised), any(turns))
+    let (mut raised, mut turns) = (false, false);
+    for i in 0..dmt.len() {
+        let d = ut[i].abs();
+        raised |= d > dmt[i];
+        dmt[i] = if d > dmt[i] { d } else { dmt[i] };
+        let vs = (kt[i] * (ut[i] - belowt[i])).abs();
+        raised |= vs > smt[i];
+        smt[i] = if vs > smt[i] { vs } else { smt[i] };
+        let (r0, r1) = (
+            kt[i] * (udpt[i] - pbelowt[i]),
+            kt[i] * (udt[i] - vbelowt[i]),
+        );
+        let (d_turn, s_turn) = (udpt[i] * udt[i] < 0.0, r0 * r1 < 0.0);
+        tdt[i] = if d_turn { -1.0 } else { 0.0 };
+        tst[i] = if s_turn { -1.0 } else { 0.0 };
+        turns |= d_turn | s_turn;
+    }
+    (raised | any(simd, rv), turns | any(simd, tv))
+}
+
+/// Whether some lane of the mask is set.
+#[inline(always)]
+fn any<S: pulp::Simd>(simd: S, m: S::m64s) -> bool {
+    let v = simd.select_f64s(m, simd.splat_f64s(-1.0), simd.splat_f64s(0.0));
+    let lanes: &[u64] = pulp::bytemuck::cast_slice(std::slice::from_ref(&v));
+    lanes.iter().fold(0, |a, &x| a | x) != 0
 }

@@ -125,11 +125,11 @@ pub struct Stepper<'a> {
     pub(super) overlap_lower: Vec<f64>,
     /// Candidates for the continuous peaks, refined at the end ([`peaks::Deferred`]).
     pub(super) deferred: peaks::Deferred,
-    /// Scratch of the observation: the flags of one building (one byte per floor, then one
-    /// per story, padded; see `observe::sample`) or of the overlap pairs, and the homogeneous amplitudes of every
+    /// Scratch of the observation: the turn flags of one building (−1 or 0 per floor, then
+    /// per story, padded; see `observe::sample`), and the homogeneous amplitudes of every
     /// mode over the interval (for the Hermite error bounds; building b's modes valid if
     /// `amp_valid[b]`) with their per-mode constants.
-    pub(super) flags: Vec<u8>,
+    pub(super) flags: Vec<f64>,
     pub(super) obs_amp: Vec<f64>,
     pub(super) amp_valid: Vec<bool>,
     pub(super) amp_k: Vec<[f64; 3]>,
@@ -391,7 +391,7 @@ impl<'a> Stepper<'a> {
         st.overlap_lim = vec![0.0; st.overlap_runs.len()];
         st.overlap_turn = vec![0.0; st.overlaps.pairs.len()];
         let widest = p.modal.buildings.iter().map(|b| b.padded_floors()).max();
-        st.flags = vec![0; (2 * widest.unwrap_or(0)).max(st.overlaps.pairs.len())];
+        st.flags = vec![0.0; 2 * widest.unwrap_or(0)];
         let w2 = &p.omega2;
         let inv_f = |c: &[f64], first: usize| {
             let f2: f64 = c
