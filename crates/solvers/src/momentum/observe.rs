@@ -50,7 +50,7 @@ impl Stepper<'_> {
         self.amp_valid.fill(false);
         let mut stored: Option<usize> = None;
         let nb = self.p.modal.buildings.len();
-        let skip_overlaps = self.envelope(len);
+        let skip_overlaps = self.envelope(simd, len);
         let mut all = true;
         for b in 0..nb {
             if self.skip[b] {
@@ -171,7 +171,7 @@ impl Stepper<'_> {
     /// Sets `skip` per building from the energy envelope (see module docs) and returns
     /// whether the overlap audit can be skipped too.
     #[inline(always)]
-    fn envelope(&mut self, len: f64) -> bool {
+    fn envelope<S: pulp::Simd>(&mut self, simd: S, len: f64) -> bool {
         if !(len > 0.0) || self.history.is_some() || self.interval.fc.is_some() {
             self.skip.fill(false);
             self.env_e2_fresh = false;
@@ -199,16 +199,30 @@ impl Stepper<'_> {
         if self.overlap_stale {
             // Per run, the smallest max(maximum, lower)/f_y of its pairs (0 if one is not
             // positive): every pair of the run passes the test below iff this one does.
+            // (Branch-free: all positive, then the least; the same value.)
             for (run, lim) in self.overlap_runs.iter().zip(&mut self.overlap_lim) {
-                let mut m = f64::INFINITY;
-                for k in run.k0..run.k0 + run.n {
-                    let l = self.overlaps.max[k].max(self.overlap_lower[k]) * self.overlap_inv[k];
-                    m = if l > 0.0 { m.min(l) } else { 0.0 };
-                    if m == 0.0 {
-                        break;
-                    }
+                let r = run.k0..run.k0 + run.n;
+                let (mx, mxt) = S::as_simd_f64s(&self.overlaps.max[r.clone()]);
+                let (lo, lot) = S::as_simd_f64s(&self.overlap_lower[r.clone()]);
+                let (inv, invt) = S::as_simd_f64s(&self.overlap_inv[r]);
+                let (zero, inf) = (simd.splat_f64s(0.0), simd.splat_f64s(f64::INFINITY));
+                let (mut mv, mut bad) = (inf, simd.less_than_f64s(inf, zero));
+                for ((&a, &b), &f) in mx.iter().zip(lo).zip(inv) {
+                    let l = simd.mul_f64s(simd.max_f64s(a, b), f);
+                    bad = simd.or_m64s(bad, simd.not_m64s(simd.greater_than_f64s(l, zero)));
+                    mv = simd.select_f64s(simd.less_than_f64s(l, mv), l, mv);
                 }
-                *lim = m;
+                let mut m = f64::INFINITY;
+                let mut ok = !self::any(simd, bad);
+                for &x in pulp::bytemuck::cast_slice::<S::f64s, f64>(std::slice::from_ref(&mv)) {
+                    m = if x < m { x } else { m };
+                }
+                for ((&a, &b), &f) in mxt.iter().zip(lot).zip(invt) {
+                    let l = a.max(b) * f;
+                    ok &= l > 0.0;
+                    m = if l < m { l } else { m };
+                }
+                *lim = if ok { m } else { 0.0 };
             }
             self.overlap_stale = false;
         }
