@@ -116,32 +116,36 @@ impl Stepper<'_> {
                 continue;
             }
             self.env_stale[b] = false;
-            // Four running minima over the padded floors (a padding floor's 0 · ∞ = NaN is
-            // never below one), then the least of them: the minimum of the same values.
+            // Running minima in vectors over the padded floors (a padding floor's 0 · ∞ = NaN
+            // is never below one), then the least of them: the minimum of the same values.
             let pf = self.disp_max[b].len();
             let (inv_d, inv_s) = self.env_inv[b][..2 * pf].split_at(pf);
             let (dm, dl) = (&self.disp_max[b][..pf], &self.disp_lower[b][..pf]);
             let (sm, sl) = (&self.shear_max[b][..pf], &self.shear_lower[b][..pf]);
-            let mut acc = [f64::INFINITY; 4];
-            fn c4(x: &[f64]) -> std::slice::ChunksExact<'_, f64> {
-                x.chunks_exact(4)
+            let (dm, dmt) = S::as_simd_f64s(dm);
+            let (dl, dlt) = S::as_simd_f64s(dl);
+            let (sm, smt) = S::as_simd_f64s(sm);
+            let (sl, slt) = S::as_simd_f64s(sl);
+            let (id, idt) = S::as_simd_f64s(inv_d);
+            let (is, ist) = S::as_simd_f64s(inv_s);
+            let mut mv = simd.splat_f64s(f64::INFINITY);
+            let least = |a, b| simd.select_f64s(simd.less_than_f64s(b, a), b, a);
+            let most = |a, b| simd.select_f64s(simd.greater_than_f64s(a, b), a, b);
+            let nv = dm.len().min(dl.len()).min(sm.len()).min(sl.len());
+            for i in 0..nv.min(id.len()).min(is.len()) {
+                mv = least(mv, simd.mul_f64s(most(dm[i], dl[i]), id[i]));
+                mv = least(mv, simd.mul_f64s(most(sm[i], sl[i]), is[i]));
             }
-            for (((((dm, dl), sm), sl), id), is) in c4(dm)
-                .zip(c4(dl))
-                .zip(c4(sm))
-                .zip(c4(sl))
-                .zip(c4(inv_d))
-                .zip(c4(inv_s))
-            {
-                for l in 0..4 {
-                    let pd = if dm[l] > dl[l] { dm[l] } else { dl[l] } * id[l];
-                    let ps = if sm[l] > sl[l] { sm[l] } else { sl[l] } * is[l];
-                    acc[l] = if pd < acc[l] { pd } else { acc[l] };
-                    acc[l] = if ps < acc[l] { ps } else { acc[l] };
-                }
+            let mut thr = f64::INFINITY;
+            for &x in pulp::bytemuck::cast_slice::<S::f64s, f64>(std::slice::from_ref(&mv)) {
+                thr = if x < thr { x } else { thr };
             }
-            let least = |a: f64, b: f64| if b < a { b } else { a };
-            let thr = least(least(acc[0], acc[1]), least(acc[2], acc[3]));
+            for i in 0..dmt.len() {
+                let pd = if dmt[i] > dlt[i] { dmt[i] } else { dlt[i] } * idt[i];
+                let ps = if smt[i] > slt[i] { smt[i] } else { slt[i] } * ist[i];
+                thr = if pd < thr { pd } else { thr };
+                thr = if ps < thr { ps } else { thr };
+            }
             self.env_thr[b] = thr;
         }
         if !self.overlaps.is_empty() && !skip_overlaps {
