@@ -99,7 +99,10 @@ fn tile<const W: usize, const R: usize>(
     i0: usize,
 ) {
     let mut acc = [[0.0f64; W]; R];
-    for (m, col) in cols.chunks_exact(W).enumerate() {
+    // The modal vectors cut to the modes of `cols` (no bounds checks in the loop).
+    let nm = q[0].len();
+    let q: [&[f64]; R] = std::array::from_fn(|r| &q[r][..nm]);
+    for (col, m) in cols.chunks_exact(W).zip(0..nm) {
         let col: &[f64; W] = col.try_into().unwrap();
         for r in 0..R {
             let qm = q[r][m];

@@ -26,17 +26,36 @@ use super::peaks::{self, Candidate, Target};
 use super::stepper::Stepper;
 
 impl Stepper<'_> {
-    /// Observes the current instant (see module docs).
+    /// Observes the current instant (see module docs), in vectors of the widest instruction
+    /// set ([`pulp::Arch`]; exact operations only, so bit-identical on every machine).
     #[inline(always)]
     pub(super) fn observe(&mut self) {
+        struct Op<'s, 'a> {
+            st: &'s mut Stepper<'a>,
+        }
+        impl pulp::WithSimd for Op<'_, '_> {
+            type Output = ();
+            #[inline(always)]
+            fn with_simd<S: pulp::Simd>(self, simd: S) {
+                self.st.observe_with(simd)
+            }
+        }
+        let arch = self.arch;
+        arch.dispatch(Op { st: self })
+    }
+
+    #[inline(always)]
+    fn observe_with<S: pulp::Simd>(&mut self, simd: S) {
         let len = self.interval.tau_done;
         self.amp_valid.fill(false);
         let mut stored: Option<usize> = None;
         let nb = self.p.modal.buildings.len();
-        let skip_overlaps = self.envelope(len);
+        let skip_overlaps = self.envelope(simd, len);
+        let mut all = true;
         for b in 0..nb {
             if self.skip[b] {
                 self.prev_valid[b] = false;
+                all = false;
                 continue;
             }
             let bm = &self.p.modal.buildings[b];
@@ -53,30 +72,36 @@ impl Stepper<'_> {
                 &mut self.u[b][1..],
                 &mut self.ud[b][1..],
             );
-            let (raised, flagged) = sample(
+            let (raised, turns) = sample(
+                simd,
                 Sample {
                     u: &self.u[b],
                     ud: &self.ud[b],
-                    up: &self.u_prev[b],
                     udp: &self.ud_prev[b],
                     k: &self.stiffness[b],
-                    disp_lower: &self.disp_lower[b],
-                    shear_lower: &self.shear_lower[b],
                 },
                 &mut self.disp_max[b],
                 &mut self.shear_max[b],
                 &mut self.flags,
-                len,
             );
             self.env_stale[b] |= raised;
-            if flagged {
+            if turns && len > 0.0 {
                 // The rare slow path, in the order floor 0 displacement, story 0 shear,
-                // floor 1 …: the same filter, quantity by quantity.
+                // floor 1 …: each quantity whose rate changes sign, through the filter of
+                // `interior_extremum`.
                 let n = self.disp_max[b].len();
-                for i in 0..nf {
-                    for story in [false, true] {
-                        if self.flags[i + if story { n } else { 0 }] != 0 {
-                            self.interior_extremum(b, i, story, len, &mut stored);
+                for i0 in (0..n).step_by(4) {
+                    let (d, s) = (arr::<4>(&self.flags, i0), arr::<4>(&self.flags, n + i0));
+                    let bits = |a: &[f64; 4]| a.iter().fold(0, |m, x| m | x.to_bits());
+                    if bits(d) | bits(s) == 0 {
+                        continue;
+                    }
+                    for i in i0..i0 + 4 {
+                        if self.flags[i] != 0.0 {
+                            self.interior_extremum(b, i, false, len, &mut stored);
+                        }
+                        if self.flags[n + i] != 0.0 {
+                            self.interior_extremum(b, i, true, len, &mut stored);
                         }
                     }
                 }
@@ -91,25 +116,54 @@ impl Stepper<'_> {
                 continue;
             }
             self.env_stale[b] = false;
-            let (inv_d, inv_s) = self.env_inv[b][..2 * nf].split_at(nf);
-            let (dm, dl) = (&self.disp_max[b][..nf], &self.disp_lower[b][..nf]);
-            let (sm, sl) = (&self.shear_max[b][..nf], &self.shear_lower[b][..nf]);
+            // Running minima in vectors over the padded floors (a padding floor's 0 · ∞ = NaN
+            // is never below one), then the least of them: the minimum of the same values.
+            let pf = self.disp_max[b].len();
+            let (inv_d, inv_s) = self.env_inv[b][..2 * pf].split_at(pf);
+            let (dm, dl) = (&self.disp_max[b][..pf], &self.disp_lower[b][..pf]);
+            let (sm, sl) = (&self.shear_max[b][..pf], &self.shear_lower[b][..pf]);
+            let (dm, dmt) = S::as_simd_f64s(dm);
+            let (dl, dlt) = S::as_simd_f64s(dl);
+            let (sm, smt) = S::as_simd_f64s(sm);
+            let (sl, slt) = S::as_simd_f64s(sl);
+            let (id, idt) = S::as_simd_f64s(inv_d);
+            let (is, ist) = S::as_simd_f64s(inv_s);
+            let mut mv = simd.splat_f64s(f64::INFINITY);
+            let least = |a, b| simd.select_f64s(simd.less_than_f64s(b, a), b, a);
+            let most = |a, b| simd.select_f64s(simd.greater_than_f64s(a, b), a, b);
+            let nv = dm.len().min(dl.len()).min(sm.len()).min(sl.len());
+            for i in 0..nv.min(id.len()).min(is.len()) {
+                mv = least(mv, simd.mul_f64s(most(dm[i], dl[i]), id[i]));
+                mv = least(mv, simd.mul_f64s(most(sm[i], sl[i]), is[i]));
+            }
             let mut thr = f64::INFINITY;
-            for i in 0..nf {
-                let (pd, ps) = (dm[i].max(dl[i]) * inv_d[i], sm[i].max(sl[i]) * inv_s[i]);
-                thr = thr.min(pd).min(ps);
+            for &x in pulp::bytemuck::cast_slice::<S::f64s, f64>(std::slice::from_ref(&mv)) {
+                thr = if x < thr { x } else { thr };
+            }
+            for i in 0..dmt.len() {
+                let pd = if dmt[i] > dlt[i] { dmt[i] } else { dlt[i] } * idt[i];
+                let ps = if smt[i] > slt[i] { smt[i] } else { slt[i] } * ist[i];
+                thr = if pd < thr { pd } else { thr };
+                thr = if ps < thr { ps } else { thr };
             }
             self.env_thr[b] = thr;
         }
         if !self.overlaps.is_empty() && !skip_overlaps {
-            self.observe_overlaps(len, &mut stored);
+            self.observe_overlaps(simd, len, &mut stored);
         }
-        for b in 0..nb {
-            if !self.skip[b] {
-                // The current sample becomes the previous one (buffers exchanged).
-                std::mem::swap(&mut self.u_prev[b], &mut self.u[b]);
-                std::mem::swap(&mut self.ud_prev[b], &mut self.ud[b]);
-                self.prev_valid[b] = true;
+        // The current sample becomes the previous one (buffers exchanged; all at once when
+        // every building was observed).
+        if all {
+            std::mem::swap(&mut self.u_prev, &mut self.u);
+            std::mem::swap(&mut self.ud_prev, &mut self.ud);
+            self.prev_valid.fill(true);
+        } else {
+            for b in 0..nb {
+                if !self.skip[b] {
+                    std::mem::swap(&mut self.u_prev[b], &mut self.u[b]);
+                    std::mem::swap(&mut self.ud_prev[b], &mut self.ud[b]);
+                    self.prev_valid[b] = true;
+                }
             }
         }
         if self.history.is_some() {
@@ -121,9 +175,9 @@ impl Stepper<'_> {
     /// Sets `skip` per building from the energy envelope (see module docs) and returns
     /// whether the overlap audit can be skipped too.
     #[inline(always)]
-    fn envelope(&mut self, len: f64) -> bool {
-        self.skip.fill(false);
+    fn envelope<S: pulp::Simd>(&mut self, simd: S, len: f64) -> bool {
         if !(len > 0.0) || self.history.is_some() || self.interval.fc.is_some() {
+            self.skip.fill(false);
             self.env_e2_fresh = false;
             return false;
         }
@@ -149,16 +203,30 @@ impl Stepper<'_> {
         if self.overlap_stale {
             // Per run, the smallest max(maximum, lower)/f_y of its pairs (0 if one is not
             // positive): every pair of the run passes the test below iff this one does.
+            // (Branch-free: all positive, then the least; the same value.)
             for (run, lim) in self.overlap_runs.iter().zip(&mut self.overlap_lim) {
-                let mut m = f64::INFINITY;
-                for k in run.k0..run.k0 + run.n {
-                    let l = self.overlaps.max[k].max(self.overlap_lower[k]) * self.overlap_inv[k];
-                    m = if l > 0.0 { m.min(l) } else { 0.0 };
-                    if m == 0.0 {
-                        break;
-                    }
+                let r = run.k0..run.k0 + run.n;
+                let (mx, mxt) = S::as_simd_f64s(&self.overlaps.max[r.clone()]);
+                let (lo, lot) = S::as_simd_f64s(&self.overlap_lower[r.clone()]);
+                let (inv, invt) = S::as_simd_f64s(&self.overlap_inv[r]);
+                let (zero, inf) = (simd.splat_f64s(0.0), simd.splat_f64s(f64::INFINITY));
+                let (mut mv, mut bad) = (inf, simd.less_than_f64s(inf, zero));
+                for ((&a, &b), &f) in mx.iter().zip(lo).zip(inv) {
+                    let l = simd.mul_f64s(simd.max_f64s(a, b), f);
+                    bad = simd.or_m64s(bad, simd.not_m64s(simd.greater_than_f64s(l, zero)));
+                    mv = simd.select_f64s(simd.less_than_f64s(l, mv), l, mv);
                 }
-                *lim = m;
+                let mut m = f64::INFINITY;
+                let mut ok = !self::any(simd, bad);
+                for &x in pulp::bytemuck::cast_slice::<S::f64s, f64>(std::slice::from_ref(&mv)) {
+                    m = if x < m { x } else { m };
+                }
+                for ((&a, &b), &f) in mxt.iter().zip(lot).zip(invt) {
+                    let l = a.max(b) * f;
+                    ok &= l > 0.0;
+                    m = if l < m { l } else { m };
+                }
+                *lim = if ok { m } else { 0.0 };
             }
             self.overlap_stale = false;
         }
@@ -281,92 +349,74 @@ impl Stepper<'_> {
     /// story-shear and displacement peaks are (Hermite estimate, cheap filter, rigorous
     /// Hermite error bound over both buildings' modes, deferred refinement).
     #[inline(always)]
-    fn observe_overlaps(&mut self, len: f64, stored: &mut Option<usize>) {
+    fn observe_overlaps<S: pulp::Simd>(&mut self, simd: S, len: f64, stored: &mut Option<usize>) {
         // First pass, every pair: the sample (a running maximum, branch-free) and whether the
         // rate turns from + to − over the interval (rare: only those go on).
-        let (mut turns, mut raised) = (false, false);
-        {
-            let (u, ud, udp) = (&self.u, &self.ud, &self.ud_prev);
-            let ov = &mut self.overlaps;
-            for run in &self.overlap_runs {
-                let (n, k0) = (run.n, run.k0);
-                let (i0, j0) = (run.i0 + 1, run.j0 + 1); // the leading zero of the buffers
-                let (ul, ur) = (&u[run.left][i0..i0 + n], &u[run.right][j0..j0 + n]);
-                let (vl, vr) = (&ud[run.left][i0..i0 + n], &ud[run.right][j0..j0 + n]);
-                let (pl, pr) = (&udp[run.left][i0..i0 + n], &udp[run.right][j0..j0 + n]);
-                let max = &mut ov.max[k0..k0 + n];
-                let time = &mut ov.time[k0..k0 + n];
-                let flags = &mut self.flags[k0..k0 + n];
-                for t in 0..n {
-                    let y1 = ul[t] - ur[t];
-                    let up = y1 > max[t];
-                    max[t] = if up { y1 } else { max[t] };
-                    time[t] = if up { self.s.t } else { time[t] };
-                    let turn = (pl[t] - pr[t] > 0.0) & (vl[t] - vr[t] < 0.0);
-                    flags[t] = turn as u8;
-                    turns |= turn;
-                    raised |= up;
-                }
-            }
-        }
+        let (turns, raised) = pulp::WithSimd::with_simd(OverlapPass { st: self }, simd);
         self.overlap_stale |= raised;
         if !(len > 0.0) || !turns {
             return;
         }
         for k in 0..self.overlaps.pairs.len() {
-            if self.flags[k] == 0 {
-                continue;
+            if self.overlap_turn[k] != 0.0 {
+                self.overlap_extremum(k, len, stored);
             }
-            let (u, ud, up, udp) = (&self.u, &self.ud, &self.u_prev, &self.ud_prev);
-            let op = &self.overlaps.pairs[k];
-            let (l, i, r, j) = (op.left, op.left_dof, op.right, op.right_dof);
-            let (i, j) = (i + 1, j + 1); // the leading zero of the buffers
-            let y1 = u[l][i] - u[r][j];
-            let (y0, yd0, yd1) = (
-                up[l][i] - up[r][j],
-                udp[l][i] - udp[r][j],
-                ud[l][i] - ud[r][j],
-            );
-            let best = self.overlaps.max[k].max(self.overlap_lower[k]);
-            // H ≤ max(y0, y1) + 4/27 len (|ẏ0| + |ẏ1|) (see `interior_extremum`), and the
-            // filter below drops h < best/1.1 (best > 0) or h < best/0.9 (best ≤ 0).
-            let cubic_bound = y0.max(y1) + 4.0 / 27.0 * len * (yd0.abs() + yd1.abs());
-            let bound = cubic_bound + 1e-9 * cubic_bound.abs();
-            if bound + 0.1 * bound.abs() < best {
-                continue;
-            }
-            let Some((th, h)) = peaks::hermite_extremum(y0, yd0, y1, yd1, len) else {
-                continue;
-            };
-            // Cheap filter, as for the peaks: the Hermite error is a small fraction of the
-            // content at the interval's frequencies.
-            if h + 0.1 * h.abs() < best {
-                continue;
-            }
-            let modal = &self.p.modal;
-            for b in [l, r] {
-                if !self.amp_valid[b] {
-                    let range = modal.buildings[b].range.clone();
-                    peaks::amplitudes(modal, &self.amp_k, range, &self.interval, &mut self.obs_amp);
-                    self.amp_valid[b] = true;
-                }
-            }
-            let c = &self.overlap_rows[k];
-            let bound = peaks::hermite_error_bound(modal, 0, c, &self.obs_amp, len);
-            if h + bound < best {
-                continue;
-            }
-            self.overlap_lower[k] = self.overlap_lower[k].max(h - bound);
-            self.overlap_stale = true;
-            let interval =
-                *stored.get_or_insert_with(|| self.deferred.store(&self.interval, self.s.t));
-            self.deferred.candidates.push(Candidate {
-                target: Target::Overlap { pair: k },
-                interval,
-                s0: th * len,
-                upper: h + bound,
-            });
         }
+    }
+
+    /// The rare slow path of overlap pair `k` whose rate turns from + to − over the
+    /// interval of length `len` (see [`Stepper::observe_overlaps`]).
+    #[cold]
+    #[inline(never)]
+    fn overlap_extremum(&mut self, k: usize, len: f64, stored: &mut Option<usize>) {
+        let (u, ud, up, udp) = (&self.u, &self.ud, &self.u_prev, &self.ud_prev);
+        let op = &self.overlaps.pairs[k];
+        let (l, i, r, j) = (op.left, op.left_dof, op.right, op.right_dof);
+        let (i, j) = (i + 1, j + 1); // the leading zero of the buffers
+        let y1 = u[l][i] - u[r][j];
+        let (y0, yd0, yd1) = (
+            up[l][i] - up[r][j],
+            udp[l][i] - udp[r][j],
+            ud[l][i] - ud[r][j],
+        );
+        let best = self.overlaps.max[k].max(self.overlap_lower[k]);
+        // H ≤ max(y0, y1) + 4/27 len (|ẏ0| + |ẏ1|) (see `interior_extremum`), and the
+        // filter below drops h < best/1.1 (best > 0) or h < best/0.9 (best ≤ 0).
+        let cubic_bound = y0.max(y1) + 4.0 / 27.0 * len * (yd0.abs() + yd1.abs());
+        let bound = cubic_bound + 1e-9 * cubic_bound.abs();
+        if bound + 0.1 * bound.abs() < best {
+            return;
+        }
+        let Some((th, h)) = peaks::hermite_extremum(y0, yd0, y1, yd1, len) else {
+            return;
+        };
+        // Cheap filter, as for the peaks: the Hermite error is a small fraction of the
+        // content at the interval's frequencies.
+        if h + 0.1 * h.abs() < best {
+            return;
+        }
+        let modal = &self.p.modal;
+        for b in [l, r] {
+            if !self.amp_valid[b] {
+                let range = modal.buildings[b].range.clone();
+                peaks::amplitudes(modal, &self.amp_k, range, &self.interval, &mut self.obs_amp);
+                self.amp_valid[b] = true;
+            }
+        }
+        let c = &self.overlap_rows[k];
+        let bound = peaks::hermite_error_bound(modal, 0, c, &self.obs_amp, len);
+        if h + bound < best {
+            return;
+        }
+        self.overlap_lower[k] = self.overlap_lower[k].max(h - bound);
+        self.overlap_stale = true;
+        let interval = *stored.get_or_insert_with(|| self.deferred.store(&self.interval, self.s.t));
+        self.deferred.candidates.push(Candidate {
+            target: Target::Overlap { pair: k },
+            interval,
+            s0: th * len,
+            upper: h + bound,
+        });
     }
 
     /// Refines the deferred candidates (see [`peaks::Deferred`]) into the exact peaks and
@@ -445,6 +495,92 @@ impl Stepper<'_> {
     }
 }
 
+/// `x[t..t + W]` as an array.
+#[inline(always)]
+fn arr<const W: usize>(x: &[f64], t: usize) -> &[f64; W] {
+    x[t..t + W].try_into().unwrap()
+}
+
+/// The first pass of the overlap audit over every pair (see [`Stepper::observe_overlaps`]),
+/// in vectors of the widest instruction set: the running maxima (and their times) of
+/// u_left − u_right, and whether each pair's rate turns from + to − over the interval
+/// (`overlap_turn`: 1 or 0). Returns (some rate turns, some maximum was raised).
+struct OverlapPass<'s, 'a> {
+    st: &'s mut Stepper<'a>,
+}
+
+impl pulp::WithSimd for OverlapPass<'_, '_> {
+    type Output = (bool, bool);
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, simd: S) -> (bool, bool) {
+        let st = self.st;
+        let (u, ud, udp) = (&st.u, &st.ud, &st.ud_prev);
+        let now = st.s.t;
+        let ov = &mut st.overlaps;
+        let (zero, one, nowv) = (
+            simd.splat_f64s(0.0),
+            simd.splat_f64s(1.0),
+            simd.splat_f64s(now),
+        );
+        let (mut tv, mut rv) = (
+            simd.less_than_f64s(one, zero),
+            simd.less_than_f64s(one, zero),
+        );
+        let (mut turns, mut raised) = (false, false);
+        for run in &st.overlap_runs {
+            let (n, k0) = (run.n, run.k0);
+            let (i0, j0) = (run.i0 + 1, run.j0 + 1); // the leading zero of the buffers
+            let (ul, ur) = (&u[run.left][i0..i0 + n], &u[run.right][j0..j0 + n]);
+            let (vl, vr) = (&ud[run.left][i0..i0 + n], &ud[run.right][j0..j0 + n]);
+            let (pl, pr) = (&udp[run.left][i0..i0 + n], &udp[run.right][j0..j0 + n]);
+            let (max, mt) = S::as_mut_simd_f64s(&mut ov.max[k0..k0 + n]);
+            let (time, tt) = S::as_mut_simd_f64s(&mut ov.time[k0..k0 + n]);
+            let (flag, ft) = S::as_mut_simd_f64s(&mut st.overlap_turn[k0..k0 + n]);
+            let (ul, ult) = S::as_simd_f64s(ul);
+            let (ur, urt) = S::as_simd_f64s(ur);
+            let (vl, vlt) = S::as_simd_f64s(vl);
+            let (vr, vrt) = S::as_simd_f64s(vr);
+            let (pl, plt) = S::as_simd_f64s(pl);
+            let (pr, prt) = S::as_simd_f64s(pr);
+            for ((((((((max, time), flag), ul), ur), vl), vr), pl), pr) in max
+                .iter_mut()
+                .zip(time.iter_mut())
+                .zip(flag.iter_mut())
+                .zip(ul)
+                .zip(ur)
+                .zip(vl)
+                .zip(vr)
+                .zip(pl)
+                .zip(pr)
+            {
+                let y1 = simd.sub_f64s(*ul, *ur);
+                let up = simd.greater_than_f64s(y1, *max);
+                *max = simd.select_f64s(up, y1, *max);
+                *time = simd.select_f64s(up, nowv, *time);
+                let turn = simd.and_m64s(
+                    simd.greater_than_f64s(simd.sub_f64s(*pl, *pr), zero),
+                    simd.less_than_f64s(simd.sub_f64s(*vl, *vr), zero),
+                );
+                *flag = simd.select_f64s(turn, one, zero);
+                tv = simd.or_m64s(tv, turn);
+                rv = simd.or_m64s(rv, up);
+            }
+            for t in 0..mt.len() {
+                let y1 = ult[t] - urt[t];
+                let up = y1 > mt[t];
+                mt[t] = if up { y1 } else { mt[t] };
+                tt[t] = if up { now } else { tt[t] };
+                let turn = (plt[t] - prt[t] > 0.0) & (vlt[t] - vrt[t] < 0.0);
+                ft[t] = if turn { 1.0 } else { 0.0 };
+                turns |= turn;
+                raised |= up;
+            }
+        }
+        (turns | any(simd, tv), raised | any(simd, rv))
+    }
+}
+
 /// 2E = Σ_n (q̇_n² + ω_n² q_n²) over the modes `r` (four partial sums over chunks of 4
 /// modes from the range start, the tail into the first; the order does not matter for the
 /// bounds that use it, whose margins cover the round-off).
@@ -480,70 +616,88 @@ fn cubic_bound(y0: f64, yd0: f64, y1: f64, yd1: f64, c: f64) -> f64 {
 struct Sample<'s> {
     u: &'s [f64],
     ud: &'s [f64],
-    up: &'s [f64],
     udp: &'s [f64],
     k: &'s [f64],
-    disp_lower: &'s [f64],
-    shear_lower: &'s [f64],
 }
 
-/// The sample of one building, branch-free over its (padded) floors so that it vectorises:
-/// the running peaks of |u_i| and |V_i| = |k_i (u_i − u_{i−1})| (`dm`, `sm`), and whether
-/// any quantity needs the slow path of [`Stepper::interior_extremum`] (its rate changes sign
-/// over the interval of length `len` > 0 and the cubic bound reaches 90 % of its peak).
-/// Returns (a peak was raised, a quantity is flagged); `flags` receives one byte per
-/// displacement then one per shear (1: flagged). The padding floors are zeros and never
-/// raise or flag anything.
+/// The sample of one building, branch-free over its (padded) floors in vectors of `simd`:
+/// the running peaks of |u_i| and |V_i| = |k_i (u_i − u_{i−1})| (`dm`, `sm`), and which
+/// quantities' rates ẏ change sign over the interval (rare: only those may have an interior
+/// extremum, [`Stepper::interior_extremum`]): `turn` receives −1 (turns) or 0 per floor
+/// displacement, then per story shear. Returns (a peak was raised, some rate changes sign).
+/// The padding floors are zeros and never raise or flag anything.
 #[inline(always)]
-fn sample(
+fn sample<S: pulp::Simd>(
+    simd: S,
     s: Sample<'_>,
     dm: &mut [f64],
     sm: &mut [f64],
-    flags: &mut [u8],
-    len: f64,
+    turn: &mut [f64],
 ) -> (bool, bool) {
     let n = dm.len();
-    let (u, below) = (&s.u[1..=n], &s.u[..n]);
-    let (ud, vbelow) = (&s.ud[1..=n], &s.ud[..n]);
-    let (up, below_p) = (&s.up[1..=n], &s.up[..n]);
-    let (udp, vbelow_p) = (&s.udp[1..=n], &s.udp[..n]);
-    let (k, dl, sl, sm) = (
-        &s.k[..n],
-        &s.disp_lower[..n],
-        &s.shear_lower[..n],
-        &mut sm[..n],
+    let (td, ts) = turn[..2 * n].split_at_mut(n);
+    let (dm, dmt) = S::as_mut_simd_f64s(dm);
+    let (sm, smt) = S::as_mut_simd_f64s(&mut sm[..n]);
+    let (td, tdt) = S::as_mut_simd_f64s(td);
+    let (ts, tst) = S::as_mut_simd_f64s(ts);
+    let (u, ut) = S::as_simd_f64s(&s.u[1..=n]);
+    let (below, belowt) = S::as_simd_f64s(&s.u[..n]);
+    let (ud, udt) = S::as_simd_f64s(&s.ud[1..=n]);
+    let (vbelow, vbelowt) = S::as_simd_f64s(&s.ud[..n]);
+    let (udp, udpt) = S::as_simd_f64s(&s.udp[1..=n]);
+    let (pbelow, pbelowt) = S::as_simd_f64s(&s.udp[..n]);
+    let (k, kt) = S::as_simd_f64s(&s.k[..n]);
+    let m = dm.len();
+    let (sm, td, ts) = (&mut sm[..m], &mut td[..m], &mut ts[..m]);
+    let (u, below, ud, vbelow) = (&u[..m], &below[..m], &ud[..m], &vbelow[..m]);
+    let (udp, pbelow, k) = (&udp[..m], &pbelow[..m], &k[..m]);
+    let (zero, one) = (simd.splat_f64s(0.0), simd.splat_f64s(1.0));
+    let mone = simd.splat_f64s(-1.0);
+    let (mut rv, mut tv) = (
+        simd.less_than_f64s(one, zero),
+        simd.less_than_f64s(one, zero),
     );
-    let mut raised = false;
-    let mut turns = false;
-    for i in 0..n {
-        let d = u[i].abs();
-        raised |= d > dm[i];
-        dm[i] = if d > dm[i] { d } else { dm[i] };
-        let vs = (k[i] * (u[i] - below[i])).abs();
-        raised |= vs > sm[i];
-        sm[i] = if vs > sm[i] { vs } else { sm[i] };
-        // A rate that changes sign over the interval (rare): the filter below runs only then.
-        let (r0, r1) = (k[i] * (udp[i] - vbelow_p[i]), k[i] * (ud[i] - vbelow[i]));
-        turns |= (udp[i] * ud[i] < 0.0) | (r0 * r1 < 0.0);
+    for i in 0..m {
+        let d = simd.abs_f64s(u[i]);
+        let up = simd.greater_than_f64s(d, dm[i]);
+        dm[i] = simd.select_f64s(up, d, dm[i]);
+        let vs = simd.abs_f64s(simd.mul_f64s(k[i], simd.sub_f64s(u[i], below[i])));
+        let us = simd.greater_than_f64s(vs, sm[i]);
+        sm[i] = simd.select_f64s(us, vs, sm[i]);
+        rv = simd.or_m64s(rv, simd.or_m64s(up, us));
+        // A rate that changes sign over the interval (rare): the slow path runs only then.
+        let r0 = simd.mul_f64s(k[i], simd.sub_f64s(udp[i], pbelow[i]));
+        let r1 = simd.mul_f64s(k[i], simd.sub_f64s(ud[i], vbelow[i]));
+        let d_turn = simd.less_than_f64s(simd.mul_f64s(udp[i], ud[i]), zero);
+        let s_turn = simd.less_than_f64s(simd.mul_f64s(r0, r1), zero);
+        td[i] = simd.select_f64s(d_turn, mone, zero);
+        ts[i] = simd.select_f64s(s_turn, mone, zero);
+        tv = simd.or_m64s(tv, simd.or_m64s(d_turn, s_turn));
     }
-    if !(len > 0.0) || !turns {
-        return (raised, false);
+    let (mut raised, mut turns) = (false, false);
+    for i in 0..dmt.len() {
+        let d = ut[i].abs();
+        raised |= d > dmt[i];
+        dmt[i] = if d > dmt[i] { d } else { dmt[i] };
+        let vs = (kt[i] * (ut[i] - belowt[i])).abs();
+        raised |= vs > smt[i];
+        smt[i] = if vs > smt[i] { vs } else { smt[i] };
+        let (r0, r1) = (
+            kt[i] * (udpt[i] - pbelowt[i]),
+            kt[i] * (udt[i] - vbelowt[i]),
+        );
+        let (d_turn, s_turn) = (udpt[i] * udt[i] < 0.0, r0 * r1 < 0.0);
+        tdt[i] = if d_turn { -1.0 } else { 0.0 };
+        tst[i] = if s_turn { -1.0 } else { 0.0 };
+        turns |= d_turn | s_turn;
     }
-    let c = 4.0 / 27.0 * len;
-    let (fd, fs) = flags[..2 * n].split_at_mut(n);
-    let mut flagged = false;
-    for i in 0..n {
-        let (y0, yd0, y1, yd1) = (up[i], udp[i], u[i], ud[i]);
-        let peak = dm[i].max(dl[i]);
-        let f = (yd0 * yd1 < 0.0) & !(cubic_bound(y0, yd0, y1, yd1, c) * (1.0 + 1e-9) < 0.9 * peak);
-        fd[i] = f as u8;
-        flagged |= f;
-        let (y0, yd0) = (k[i] * (up[i] - below_p[i]), k[i] * (udp[i] - vbelow_p[i]));
-        let (y1, yd1) = (k[i] * (u[i] - below[i]), k[i] * (ud[i] - vbelow[i]));
-        let peak = sm[i].max(sl[i]);
-        let f = (yd0 * yd1 < 0.0) & !(cubic_bound(y0, yd0, y1, yd1, c) * (1.0 + 1e-9) < 0.9 * peak);
-        fs[i] = f as u8;
-        flagged |= f;
-    }
-    (raised, flagged)
+    (raised | any(simd, rv), turns | any(simd, tv))
+}
+
+/// Whether some lane of the mask is set.
+#[inline(always)]
+fn any<S: pulp::Simd>(simd: S, m: S::m64s) -> bool {
+    let v = simd.select_f64s(m, simd.splat_f64s(-1.0), simd.splat_f64s(0.0));
+    let lanes: &[u64] = pulp::bytemuck::cast_slice(std::slice::from_ref(&v));
+    lanes.iter().fold(0, |a, &x| a | x) != 0
 }

@@ -140,16 +140,17 @@ pub struct Stepper<'a> {
     pub(super) overlap_lower: Vec<f64>,
     /// Candidates for the continuous peaks, refined at the end ([`peaks::Deferred`]).
     pub(super) deferred: peaks::Deferred,
-    /// Scratch of the observation: the flags of one building (one byte per floor, then one
-    /// per story, padded; see `observe::sample`) or of the overlap pairs, and the homogeneous amplitudes of every
+    /// Scratch of the observation: the turn flags of one building (−1 or 0 per floor, then
+    /// per story, padded; see `observe::sample`), and the homogeneous amplitudes of every
     /// mode over the interval (for the Hermite error bounds; building b's modes valid if
     /// `amp_valid[b]`) with their per-mode constants.
-    pub(super) flags: Vec<u8>,
+    pub(super) flags: Vec<f64>,
     pub(super) obs_amp: Vec<f64>,
     pub(super) amp_valid: Vec<bool>,
     pub(super) amp_k: Vec<[f64; 3]>,
     /// Energy envelope of the observation ([`super::observe`]): per building, the inverse
-    /// flexibility norms 1/f_y of its floor displacements then story shears
+    /// flexibility norms 1/f_y of its floor displacements then story shears (each padded
+    /// with ∞ to the padded floors)
     /// (f_y = √(Σ_n c_n²/ω_n²), m/√J resp. N/√J), ‖Γ_b‖ (kg^½), the envelope threshold
     /// min_y peak_y/f_y (√J; 0 until the first observation) and whether the previous
     /// sample was observed (else u_prev, u̇_prev are rebuilt from the interval start).
@@ -176,6 +177,8 @@ pub struct Stepper<'a> {
     /// positive one yet), recomputed when a maximum or a lower bound grew (`overlap_stale`).
     pub(super) overlap_lim: Vec<f64>,
     pub(super) overlap_stale: bool,
+    /// Per overlap pair: its rate turned from + to − over the interval (1) or not (0).
+    pub(super) overlap_turn: Vec<f64>,
 }
 
 /// Σ t as [`super::observe::twice_energy`] sums its terms: four lane sums over chunks of
@@ -398,6 +401,7 @@ impl<'a> Stepper<'a> {
             overlap_runs: Vec::new(),
             overlap_lim: Vec::new(),
             overlap_stale: true,
+            overlap_turn: Vec::new(),
             coef: vec![
                 0.0;
                 p.modal
@@ -463,8 +467,9 @@ impl<'a> Stepper<'a> {
             }
         }
         st.overlap_lim = vec![0.0; st.overlap_runs.len()];
+        st.overlap_turn = vec![0.0; st.overlaps.pairs.len()];
         let widest = p.modal.buildings.iter().map(|b| b.padded_floors()).max();
-        st.flags = vec![0; (2 * widest.unwrap_or(0)).max(st.overlaps.pairs.len())];
+        st.flags = vec![0.0; 2 * widest.unwrap_or(0)];
         let w2 = &p.omega2;
         let inv_f = |c: &[f64], first: usize| {
             let f2: f64 = c
@@ -492,7 +497,9 @@ impl<'a> Stepper<'a> {
                 });
                 let shear =
                     (0..nf).map(|i| inv_f(&st.shear_rows[b][i * nmb..(i + 1) * nmb], first));
-                disp.chain(shear).collect()
+                // Padded floors: ∞ (their 0 · ∞ = NaN is never below the minimum).
+                let pad = || std::iter::repeat_n(f64::INFINITY, bm.padded_floors() - nf);
+                disp.chain(pad()).chain(shear).chain(pad()).collect()
             })
             .collect();
         st.overlap_inv = st.overlap_rows.iter().map(|r| inv_f(r, 0)).collect();
