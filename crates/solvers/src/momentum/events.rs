@@ -36,11 +36,12 @@ impl Convergency<f64> for Conv {
     }
 }
 
-/// Brent's method exactly as `roots::find_root_brent` (the same points, the same
-/// arithmetic, the same convergence calls, hence the same result bit for bit), without its
-/// re-evaluations of f at the bracket end kept by each iteration: that end's value is
-/// already known (f is a pure function of s), so each iteration costs one evaluation of f
-/// instead of two.
+/// `roots::find_root_brent` on a pure function `f`, with its repeated evaluations answered
+/// from memory: each iteration of the crate's Brent evaluates f at the new point and again
+/// at the bracket end it keeps, whose value it already had. The three most recently used
+/// points (the new point and both ends of the bracket before it) are remembered, so each
+/// iteration costs one evaluation of f instead of two; the points and the result are the
+/// crate's, bit for bit (f is pure).
 pub fn find_root_brent<Func>(
     a: f64,
     b: f64,
@@ -50,65 +51,19 @@ pub fn find_root_brent<Func>(
 where
     Func: FnMut(f64) -> f64,
 {
-    #[inline(always)]
-    fn arrange(a: f64, ya: f64, b: f64, yb: f64) -> (f64, f64, f64, f64) {
-        if ya.abs() > yb.abs() {
-            (a, ya, b, yb)
-        } else {
-            (b, yb, a, ya)
+    // Most recently used first; NaN keys never match.
+    let mut seen = [(f64::NAN, 0.0); 3];
+    let remembered = |s: f64| {
+        if let Some(k) = seen.iter().position(|e| e.0.to_bits() == s.to_bits()) {
+            seen[..=k].rotate_right(1);
+            return seen[0].1;
         }
-    }
-    let fa = f(a);
-    let fb = f(b);
-    let (mut a, mut ya, mut b, mut yb) = arrange(a, fa, b, fb);
-    if ya * yb > 0.0 {
-        return Err(SearchError::NoBracketing);
-    }
-    let (mut c, mut yc, mut d) = (a, ya, a);
-    let mut flag = true;
-    let mut iter = 0;
-    loop {
-        if convergency.is_root_found(ya) {
-            return Ok(a);
-        }
-        if convergency.is_root_found(yb) {
-            return Ok(b);
-        }
-        if convergency.is_converged(a, b) {
-            return Ok(c);
-        }
-        let mut s = if (ya != yc) && (yb != yc) {
-            a * yb * yc / ((ya - yb) * (ya - yc))
-                + b * ya * yc / ((yb - ya) * (yb - yc))
-                + c * ya * yb / ((yc - ya) * (yc - yb))
-        } else {
-            b - yb * (b - a) / (yb - ya)
-        };
-        let cond1 = (s - b) * (s - (3.0 * a + b) / 4.0) > 0.0;
-        let cond2 = flag && (s - b).abs() >= (b - c).abs() / 2.0;
-        let cond3 = !flag && (s - b).abs() >= (c - d).abs() / 2.0;
-        let cond4 = flag && convergency.is_converged(b, c);
-        let cond5 = !flag && convergency.is_converged(c, d);
-        if cond1 || cond2 || cond3 || cond4 || cond5 {
-            s = (a + b) / 2.0;
-            flag = true;
-        } else {
-            flag = false;
-        }
-        let ys = f(s);
-        d = c;
-        c = b;
-        yc = yb;
-        if ya * ys < 0.0 {
-            (a, ya, b, yb) = arrange(a, ya, s, ys);
-        } else {
-            (a, ya, b, yb) = arrange(s, ys, b, yb);
-        }
-        iter += 1;
-        if convergency.is_iteration_limit_reached(iter) {
-            return Err(SearchError::NoConvergency);
-        }
-    }
+        let y = f(s);
+        seen.rotate_right(1);
+        seen[0] = (s, y);
+        y
+    };
+    roots::find_root_brent(a, b, remembered, convergency)
 }
 
 /// Closed-form evaluation of one contact over a segment.
@@ -282,5 +237,58 @@ impl Locator<'_> {
             return self.max_bound(d0, dd0, d1, dd1) < 0.0;
         }
         true
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The memoised Brent returns the crate's root bit for bit, with at most one evaluation per
+    /// iteration (plus the two ends) instead of two.
+    #[test]
+    fn memoised_brent_is_the_crates_with_fewer_evaluations() {
+        let fs: [fn(f64) -> f64; 3] = [
+            |s| (7.3 * s).sin() - 0.3,
+            |s| s * s * s - 2.0 * s - 5.0,
+            |s| (-3.0 * s).exp() * (11.0 * s).cos() - 0.01,
+        ];
+        for (f, (a, b)) in fs.into_iter().zip([(0.0, 0.2), (2.0, 3.0), (0.0, 0.25)]) {
+            let tol = 2.0 * f64::EPSILON;
+            let (mut n_crate, mut n_memo) = (0, 0);
+            let mut c1 = Conv { tol, iterations: 0 };
+            let r1 = roots::find_root_brent(
+                a,
+                b,
+                |s| {
+                    n_crate += 1;
+                    f(s)
+                },
+                &mut c1,
+            )
+            .unwrap();
+            let mut c2 = Conv { tol, iterations: 0 };
+            let r2 = find_root_brent(
+                a,
+                b,
+                |s| {
+                    n_memo += 1;
+                    f(s)
+                },
+                &mut c2,
+            )
+            .unwrap();
+            assert_eq!(r1.to_bits(), r2.to_bits());
+            assert_eq!(c1.iterations, c2.iterations);
+            assert!(c1.iterations >= 3, "{}", c1.iterations);
+            // At most one evaluation per iteration (a new point equal to a remembered one, as
+            // at convergence, costs none).
+            assert!(
+                n_memo <= c2.iterations + 2,
+                "{n_memo} > {} + 2",
+                c2.iterations
+            );
+            assert_eq!(n_crate, 2 * c1.iterations + 2);
+        }
     }
 }
