@@ -604,12 +604,13 @@ impl<'a> Stepper<'a> {
         0.5 * self.s.v.iter().map(|v| v * v).sum::<f64>()
     }
 
-    /// Advances one segment.
-    pub fn advance(&mut self) -> Result<Step, SolverError> {
+    /// The step from the current state: `None` at the end of the analysis, else its index j,
+    /// its end (the next grid point or the duration) and its length.
+    #[inline(always)]
+    fn pending(&self) -> Option<(usize, f64, f64)> {
         let p = self.p;
-        let end_tol = 1e-12 * p.h;
-        if self.s.t >= p.duration - end_tol {
-            return Ok(Step::Finished);
+        if self.s.t >= p.duration - 1e-12 * p.h {
+            return None;
         }
         let j = self.s.j;
         let t_end = if j + 1 >= p.n_steps {
@@ -617,8 +618,27 @@ impl<'a> Stepper<'a> {
         } else {
             p.grid(j + 1)
         };
-        let tau = t_end - self.s.t;
-        if tau <= end_tol.max(1e-15 * self.s.t) {
+        Some((j, t_end, t_end - self.s.t))
+    }
+
+    /// Whether a pending step of length `tau` is a degenerate sliver (state unchanged).
+    #[inline(always)]
+    fn is_sliver(&self, tau: f64) -> bool {
+        tau <= (1e-12 * self.p.h).max(1e-15 * self.s.t)
+    }
+
+    /// Whether a pending step of length `tau` is a full base step from a grid point.
+    #[inline(always)]
+    fn is_full(&self, tau: f64) -> bool {
+        self.s.on_grid && (tau - self.p.h).abs() <= 1e-9 * self.p.h
+    }
+
+    /// Advances one segment.
+    pub fn advance(&mut self) -> Result<Step, SolverError> {
+        let Some((j, t_end, tau)) = self.pending() else {
+            return Ok(Step::Finished);
+        };
+        if self.is_sliver(tau) {
             // Degenerate sliver: jump to the grid point (state unchanged).
             self.finish_grid(j, t_end);
             return Ok(Step::Reached);
@@ -626,7 +646,7 @@ impl<'a> Stepper<'a> {
         if !self.s.persistent.is_empty() {
             return self.persistent_segment(tau, t_end);
         }
-        if self.s.on_grid && (tau - p.h).abs() <= 1e-9 * p.h {
+        if self.is_full(tau) {
             // (A step the fast path already tried from this very state is not tried again.)
             if std::mem::take(&mut self.fast_rejected) != Some(j) {
                 if let Some(step) = self.fast_step(j, t_end)? {
@@ -641,22 +661,11 @@ impl<'a> Stepper<'a> {
     /// in the same order): its index and end time.
     #[inline(always)]
     fn next_fast(&self) -> Option<(usize, f64)> {
-        let p = self.p;
-        let end_tol = 1e-12 * p.h;
-        if self.s.t >= p.duration - end_tol {
+        let (j, t_end, tau) = self.pending()?;
+        if self.is_sliver(tau) || !self.s.persistent.is_empty() {
             return None;
         }
-        let j = self.s.j;
-        let t_end = if j + 1 >= p.n_steps {
-            p.duration
-        } else {
-            p.grid(j + 1)
-        };
-        let tau = t_end - self.s.t;
-        if tau <= end_tol.max(1e-15 * self.s.t) || !self.s.persistent.is_empty() {
-            return None;
-        }
-        (self.s.on_grid && (tau - p.h).abs() <= 1e-9 * p.h).then_some((j, t_end))
+        self.is_full(tau).then_some((j, t_end))
     }
 
     pub(super) fn finish_grid(&mut self, j: usize, t_end: f64) {
