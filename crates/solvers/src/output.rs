@@ -221,6 +221,36 @@ pub struct RunOutput {
     pub unmodelled: Vec<structure::scene::UnmodelledFacing>,
 }
 
+impl RunOutput {
+    /// The result of `method` on `scene` with the fields every solver fills alike (scene
+    /// name, duration, the overlap audit's maxima, the unmodelled facing floors) and no
+    /// impacts, persistent contacts or r_N (set them with struct update syntax).
+    pub(crate) fn on_scene(
+        scene: &structure::Scene,
+        method: &str,
+        settings: String,
+        buildings: Vec<BuildingResponse>,
+        energy: EnergyAudit,
+        stats: Stats,
+        overlaps: crate::overlap::OverlapTracker,
+    ) -> RunOutput {
+        RunOutput {
+            method: method.into(),
+            settings,
+            scene: scene.name.clone(),
+            duration: scene.duration,
+            buildings,
+            impacts: Vec::new(),
+            persistent_contacts: Vec::new(),
+            energy,
+            stats,
+            r_n: Vec::new(),
+            overlaps: overlaps.finish(scene),
+            unmodelled: crate::overlap::unmodelled(scene),
+        }
+    }
+}
+
 /// Sampled state over time: at every record point and at every event instant (impact,
 /// contact closure or opening, release), so the grid is not uniform.
 #[derive(Debug, Clone, PartialEq, Default)]

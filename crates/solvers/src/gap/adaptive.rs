@@ -1144,19 +1144,16 @@ pub(crate) fn run_from(
 ) -> Result<RunOutput, SolverError> {
     let duration = scene.duration;
     let n_int = sys.n_intervals(duration);
-    let bp = |i: usize| {
-        if i + 1 >= n_int {
-            duration
-        } else {
-            (i + 1) as f64 * sys.sample_dt
-        }
-    };
+    let bp = |i: usize| sys.interval_end(i, duration);
     let mut stepper = GapStepper::new(scene, sys, first_step, bp(0));
     let keep = history.is_some();
     let mut obs = DenseObserver::new(scene, sys);
-    sys.observe_overlaps(&mut obs.overlaps, 0.0, stepper.u());
-    stepper.observe(&mut obs.tracker, keep);
-    obs.tracker.sample(0.0, history.as_deref_mut());
+    obs.start(
+        sys,
+        stepper.u(),
+        |t| stepper.observe(t, keep),
+        history.as_deref_mut(),
+    );
 
     let mut interval = 0usize;
     while interval < n_int {
@@ -1268,6 +1265,20 @@ pub(crate) struct DenseObserver {
 }
 
 impl DenseObserver {
+    /// Observes the initial state: displacements `u` for the overlap audit, `observe` for
+    /// the tracker, then the first history row (t = 0).
+    pub fn start(
+        &mut self,
+        sys: &System,
+        u: &[f64],
+        observe: impl FnOnce(&mut ResponseTracker),
+        history: Option<&mut History>,
+    ) {
+        sys.observe_overlaps(&mut self.overlaps, 0.0, u);
+        observe(&mut self.tracker);
+        self.tracker.sample(0.0, history);
+    }
+
     pub fn new(scene: &Scene, sys: &System) -> Self {
         let overlaps = crate::overlap::OverlapTracker::new(scene);
         let dofs = overlaps

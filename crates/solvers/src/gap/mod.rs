@@ -392,6 +392,16 @@ impl System {
         crate::rules::grid_steps(duration, self.sample_dt) as usize
     }
 
+    /// End of record interval `i` of an analysis of `duration` (s): the next record point,
+    /// the duration for the last interval.
+    pub fn interval_end(&self, i: usize, duration: f64) -> f64 {
+        if i + 1 >= self.n_intervals(duration) {
+            duration
+        } else {
+            (i + 1) as f64 * self.sample_dt
+        }
+    }
+
     /// Observes every building's floor displacements.
     /// Offers u_left − u_right of every audited overlap pair at time `t` (s), `u` the
     /// floor displacements of all buildings (m).
@@ -520,18 +530,16 @@ pub(crate) fn output(
         b.hysteretic_energy = stories.building_hysteretic_energy(bi);
     }
     RunOutput {
-        method: "gap".into(),
-        settings: sys.settings(scene),
-        scene: scene.name.clone(),
-        duration: scene.duration,
-        buildings,
         impacts,
-        persistent_contacts: Vec::new(),
-        energy,
-        stats,
-        r_n: Vec::new(),
-        overlaps: overlaps.finish(scene),
-        unmodelled: crate::overlap::unmodelled(scene),
+        ..RunOutput::on_scene(
+            scene,
+            "gap",
+            sys.settings(scene),
+            buildings,
+            energy,
+            stats,
+            overlaps,
+        )
     }
 }
 

@@ -21,19 +21,16 @@ pub(super) fn run(
 ) -> Result<RunOutput, SolverError> {
     let duration = scene.duration;
     let n_int = sys.n_intervals(duration);
-    let bp = |i: usize| {
-        if i + 1 >= n_int {
-            duration
-        } else {
-            (i + 1) as f64 * sys.sample_dt
-        }
-    };
+    let bp = |i: usize| sys.interval_end(i, duration);
     let mut stepper = ImpulseStepper::new(scene, sys, bp(0))?;
     let keep = history.is_some();
     let mut obs = DenseObserver::new(scene, sys);
-    sys.observe_overlaps(&mut obs.overlaps, 0.0, stepper.u());
-    stepper.observe(&mut obs.tracker, keep);
-    obs.tracker.sample(0.0, history.as_deref_mut());
+    obs.start(
+        sys,
+        stepper.u(),
+        |t| stepper.observe(t, keep),
+        history.as_deref_mut(),
+    );
 
     let mut interval = 0usize;
     while interval < n_int {
@@ -82,17 +79,16 @@ pub(super) fn run(
         b.hysteretic_energy = stories.building_hysteretic_energy(bi);
     }
     Ok(RunOutput {
-        method: "impulse".into(),
-        settings,
-        scene: scene.name.clone(),
-        duration: scene.duration,
-        buildings,
         impacts,
         persistent_contacts: phases,
-        energy,
-        stats,
-        r_n: Vec::new(),
-        overlaps: obs.overlaps.finish(scene),
-        unmodelled: crate::overlap::unmodelled(scene),
+        ..RunOutput::on_scene(
+            scene,
+            "impulse",
+            settings,
+            buildings,
+            energy,
+            stats,
+            obs.overlaps,
+        )
     })
 }

@@ -177,21 +177,15 @@ pub fn solve_with_diagnostics(
     let impacts = std::mem::take(&mut st.impacts);
     let phases = std::mem::take(&mut st.phases);
     let buildings = st.peaks(scene);
-    let overlaps = std::mem::take(&mut st.overlaps).finish(scene);
+    let overlaps = std::mem::take(&mut st.overlaps);
     Ok((
         RunOutput {
-            method: "momentum".into(),
-            settings,
-            scene: scene.name.clone(),
-            duration: scene.duration,
-            buildings,
             impacts,
             persistent_contacts: phases,
-            energy,
-            stats,
             r_n,
-            overlaps,
-            unmodelled: crate::overlap::unmodelled(scene),
+            ..RunOutput::on_scene(
+                scene, "momentum", settings, buildings, energy, stats, overlaps,
+            )
         },
         diag,
     ))
