@@ -87,15 +87,9 @@ pub struct Locator<'a> {
 impl Locator<'_> {
     fn delta(&mut self, s: f64) -> f64 {
         let mut d = 0.0;
-        for ((g, a), m) in self
-            .contact
-            .g
-            .iter()
-            .zip(self.arcs)
-            .zip(self.memo.iter_mut())
-        {
+        for (n, (g, a)) in self.contact.g.iter().zip(self.arcs).enumerate() {
             if *g != 0.0 {
-                d += g * a.x_from(s, m.get(a, s));
+                d += g * a.x_from(s, TrigMemo::get(self.arcs, self.memo, n, s));
             }
         }
         d - self.contact.gap - self.shift
@@ -103,15 +97,9 @@ impl Locator<'_> {
 
     fn ddelta(&mut self, s: f64) -> f64 {
         let mut d = 0.0;
-        for ((g, a), m) in self
-            .contact
-            .g
-            .iter()
-            .zip(self.arcs)
-            .zip(self.memo.iter_mut())
-        {
+        for (n, (g, a)) in self.contact.g.iter().zip(self.arcs).enumerate() {
             if *g != 0.0 {
-                d += g * a.v_from(m.get(a, s));
+                d += g * a.v_from(TrigMemo::get(self.arcs, self.memo, n, s));
             }
         }
         d

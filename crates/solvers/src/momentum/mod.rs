@@ -87,6 +87,7 @@ pub mod peaks;
 pub mod persistent;
 pub mod problem;
 pub mod stepper;
+pub mod trig;
 
 pub use impact::ImpactDiagnostics;
 pub use problem::Problem;

@@ -422,20 +422,62 @@ impl TrigMemo {
         next: 0,
     };
 
-    /// [`Arc::trig`] of `a` at s, from the memo if s was evaluated (for this arc) recently.
+    /// The memo's value at s, if s was evaluated (for this arc) recently.
     #[inline]
-    pub fn get(&mut self, a: &Arc, s: f64) -> [f64; 3] {
+    pub fn lookup(&self, s: f64) -> Option<[f64; 3]> {
         let k = s.to_bits();
         if !s.is_nan() {
             for i in 0..4 {
                 if self.keys[i] == k {
-                    return self.vals[i];
+                    return Some(self.vals[i]);
                 }
             }
         }
-        let t = a.trig(s);
-        self.put(s, t);
-        t
+        None
+    }
+
+    /// [`Arc::trig`] of arc `n` at s, from its memo if s was evaluated recently; else every
+    /// arc is evaluated at s at once (four at a time, [`Arc::trig4`]) and remembered: the
+    /// callers evaluate all the arcs of a segment at the same instants.
+    #[inline]
+    pub fn get(arcs: &[Arc], memo: &mut [TrigMemo], n: usize, s: f64) -> [f64; 3] {
+        if let Some(t) = memo[n].lookup(s) {
+            return t;
+        }
+        Self::fill(arcs, memo, s);
+        memo[n].vals[(memo[n].next + 3) & 3]
+    }
+
+    /// Evaluates every arc at s into its memo (in the widest instruction set).
+    pub fn fill(arcs: &[Arc], memo: &mut [TrigMemo], s: f64) {
+        struct Op<'x> {
+            arcs: &'x [Arc],
+            memo: &'x mut [TrigMemo],
+            s: f64,
+        }
+        impl pulp::WithSimd for Op<'_> {
+            type Output = ();
+            #[inline(always)]
+            fn with_simd<S: pulp::Simd>(self, _: S) {
+                TrigMemo::fill_lanes(self.arcs, self.memo, self.s)
+            }
+        }
+        pulp::Arch::new().dispatch(Op { arcs, memo, s })
+    }
+
+    #[inline(always)]
+    fn fill_lanes(arcs: &[Arc], memo: &mut [TrigMemo], s: f64) {
+        let na = arcs.len();
+        for i0 in (0..na).step_by(4) {
+            // The last group of four overlaps the one before (or repeats the last arc).
+            let idx: [usize; 4] = std::array::from_fn(|k| (i0 + k).min(na - 1));
+            let t = Arc::trig4(&idx.map(|i| arcs[i]), s);
+            for k in 0..4 {
+                if k == 0 || idx[k] != idx[k - 1] {
+                    memo[idx[k]].put(s, t[k]);
+                }
+            }
+        }
     }
 
     /// Forgets every entry.
@@ -507,17 +549,20 @@ impl Arc {
         self.xv_from(s, t)
     }
 
-    /// The transcendental part of an evaluation at s: [e^{−ζωs}, sin ω_d s, cos ω_d s].
+    /// The transcendental part of an evaluation at s: [e^{−ζωs}, sin ω_d s, cos ω_d s]
+    /// ([`super::trig`]; the same bits as [`trig_many`] gives this arc).
     #[inline]
     pub fn trig(&self, s: f64) -> [f64; 3] {
-        let (p, q) = (-self.c * s, self.d * s);
-        if p == 0.0 && q == 0.0 {
-            // exp(±0) = 1, sin(±0) = ±0, cos(±0) = 1 exactly (what libm returns).
-            return [1.0, q, 1.0];
-        }
-        let e = p.exp();
-        let (sn, cs) = q.sin_cos();
-        [e, sn, cs]
+        super::trig::exp_sin_cos1(-self.c * s, self.d * s)
+    }
+
+    /// [`Arc::trig`] of four arcs at s, lane by lane.
+    #[inline(always)]
+    pub fn trig4(arcs: &[Arc; 4], s: f64) -> [[f64; 3]; 4] {
+        let p = std::array::from_fn(|i| -arcs[i].c * s);
+        let q = std::array::from_fn(|i| arcs[i].d * s);
+        let (e, sn, cs) = super::trig::exp_sin_cos(p, q);
+        std::array::from_fn(|i| [e[i], sn[i], cs[i]])
     }
 
     /// (q(s), q̇(s)) from [`Arc::trig`] at s.
@@ -595,14 +640,15 @@ impl Arc {
                 (e * (p * sn - q * cs) + q) / den,
             )
         };
-        let ecs = |p: f64, q: f64| -> (f64, f64) {
-            let e = (p * s).exp();
-            let (sn, cs) = (q * s).sin_cos();
-            fin(p, q, e, sn, cs)
-        };
         let x = |p: f64| if p == 0.0 { s } else { (p * s).exp_m1() / p };
         let (e1c, e1s) = fin(-c, d, e1, sn1, cs1);
-        let (e2c, e2s) = ecs(-2.0 * c, 2.0 * d);
+        let (e2c, e2s) = fin(
+            -2.0 * c,
+            2.0 * d,
+            e1 * e1,
+            2.0 * sn1 * cs1,
+            (cs1 - sn1) * (cs1 + sn1),
+        );
         DampingKernels {
             e1c,
             e1s,

@@ -262,14 +262,21 @@ pub fn refine_at(
     len: f64,
     s0: f64,
 ) -> (f64, f64) {
+    let na = arcs.len().min(c.len());
     let eval = |s: f64| {
         let (mut y, mut yd, mut ydd) = (0.0, 0.0, 0.0);
-        for (m, (a, &cm)) in arcs.iter().zip(c).enumerate() {
-            if cm != 0.0 {
-                let (x, v) = a.xv(s);
-                y += cm * x;
-                yd += cm * v;
-                ydd += cm * modal.accel(first + m, x, v, a.load(s));
+        // The transcendental values four arcs at a time (the same bits as `Arc::trig`).
+        for m0 in (0..na).step_by(4) {
+            let idx: [usize; 4] = std::array::from_fn(|k| (m0 + k).min(na - 1));
+            let t = Arc::trig4(&idx.map(|i| arcs[i]), s);
+            for (k, &tk) in t.iter().enumerate().take(na - m0) {
+                let (m, a, cm) = (m0 + k, &arcs[m0 + k], c[m0 + k]);
+                if cm != 0.0 {
+                    let (x, v) = a.xv_from(s, tk);
+                    y += cm * x;
+                    yd += cm * v;
+                    ydd += cm * modal.accel(first + m, x, v, a.load(s));
+                }
             }
         }
         (y, yd, ydd)

@@ -947,7 +947,7 @@ impl<'a> Stepper<'a> {
     /// The state at the end τ of the arcs' segment into `xn`, `vn` (and `trig_end`).
     fn end_state(&mut self, tau: f64) {
         for n in 0..self.arcs.len() {
-            let t = self.memo[n].get(&self.arcs[n], tau);
+            let t = TrigMemo::get(&self.arcs, &mut self.memo, n, tau);
             let (x1, v1) = self.arcs[n].xv_from(tau, t);
             self.xn[n] = x1;
             self.vn[n] = v1;
@@ -983,9 +983,9 @@ impl<'a> Stepper<'a> {
             let m = ((tau / (p.h / p.sub as f64)) - 1e-9).ceil().max(1.0) as usize;
             let at = |s: f64, arcs: &[Arc], memo: &mut [TrigMemo]| {
                 let (mut d, mut dd) = (-ct.gap, 0.0);
-                for ((g, a), mm) in ct.g.iter().zip(arcs).zip(memo.iter_mut()) {
+                for (n, (g, a)) in ct.g.iter().zip(arcs).enumerate() {
                     if *g != 0.0 {
-                        let (x, v) = a.xv_from(s, mm.get(a, s));
+                        let (x, v) = a.xv_from(s, TrigMemo::get(arcs, memo, n, s));
                         d += g * x;
                         dd += g * v;
                     }
@@ -1067,7 +1067,7 @@ impl<'a> Stepper<'a> {
             let (x1, v1, t) = if s_end == tau {
                 (self.xn[n], self.vn[n], self.trig_end[n])
             } else {
-                let t = self.memo[n].get(&a, s_end);
+                let t = TrigMemo::get(&self.arcs, &mut self.memo, n, s_end);
                 let (x1, v1) = a.xv_from(s_end, t);
                 (x1, v1, t)
             };
