@@ -458,24 +458,30 @@ impl TrigMemo {
         impl pulp::WithSimd for Op<'_> {
             type Output = ();
             #[inline(always)]
-            fn with_simd<S: pulp::Simd>(self, _: S) {
-                TrigMemo::fill_lanes(self.arcs, self.memo, self.s)
+            fn with_simd<S: pulp::Simd>(self, simd: S) {
+                TrigMemo::fill_lanes(simd, self.arcs, self.memo, self.s)
             }
         }
         pulp::Arch::new().dispatch(Op { arcs, memo, s })
     }
 
     #[inline(always)]
-    fn fill_lanes(arcs: &[Arc], memo: &mut [TrigMemo], s: f64) {
-        let na = arcs.len();
-        for i0 in (0..na).step_by(4) {
-            // The last group of four overlaps the one before (or repeats the last arc).
-            let idx: [usize; 4] = std::array::from_fn(|k| (i0 + k).min(na - 1));
-            let t = Arc::trig4(&idx.map(|i| arcs[i]), s);
-            for k in 0..4 {
-                if k == 0 || idx[k] != idx[k - 1] {
-                    memo[idx[k]].put(s, t[k]);
-                }
+    fn fill_lanes<S: pulp::Simd>(simd: S, arcs: &[Arc], memo: &mut [TrigMemo], s: f64) {
+        // Eight arcs at a time (a multiple of every vector width).
+        const G: usize = 8;
+        for (i0, group) in arcs.chunks(G).enumerate() {
+            let n = group.len();
+            let mut p = [0.0; G];
+            let mut q = [0.0; G];
+            for (k, a) in group.iter().enumerate() {
+                p[k] = -a.c * s;
+                q[k] = a.d * s;
+            }
+            let (mut e, mut sn, mut cs) = ([0.0; G], [0.0; G], [0.0; G]);
+            // (All eight lanes: the padding lanes evaluate 0, and are not kept.)
+            super::trig::exp_sin_cos_with(simd, &p, &q, &mut e, &mut sn, &mut cs);
+            for k in 0..n {
+                memo[i0 * G + k].put(s, [e[k], sn[k], cs[k]]);
             }
         }
     }
@@ -559,9 +565,10 @@ impl Arc {
     /// [`Arc::trig`] of four arcs at s, lane by lane.
     #[inline(always)]
     pub fn trig4(arcs: &[Arc; 4], s: f64) -> [[f64; 3]; 4] {
-        let p = std::array::from_fn(|i| -arcs[i].c * s);
-        let q = std::array::from_fn(|i| arcs[i].d * s);
-        let (e, sn, cs) = super::trig::exp_sin_cos(p, q);
+        let p: [f64; 4] = std::array::from_fn(|i| -arcs[i].c * s);
+        let q: [f64; 4] = std::array::from_fn(|i| arcs[i].d * s);
+        let (mut e, mut sn, mut cs) = ([0.0; 4], [0.0; 4], [0.0; 4]);
+        super::trig::exp_sin_cos_slices(&p, &q, &mut e, &mut sn, &mut cs);
         std::array::from_fn(|i| [e[i], sn[i], cs[i]])
     }
 

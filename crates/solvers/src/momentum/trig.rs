@@ -58,102 +58,177 @@ const EXP_MAX: f64 = 700.0;
 /// Largest |q| of the vector reduction (k < 2²⁰: the products k · PIO2_i are exact).
 const TRIG_MAX: f64 = 1.0e6;
 
-/// (e^p, sin q, cos q), lane by lane (see module docs).
-#[inline(always)]
-pub fn exp_sin_cos(p: [f64; 4], q: [f64; 4]) -> ([f64; 4], [f64; 4], [f64; 4]) {
-    let e = exp4(p);
-    let (s, c) = sin_cos4(q);
-    let mut out = (e, s, c);
-    let odd = |i: usize| !(p[i].abs() <= EXP_MAX) || !(q[i].abs() <= TRIG_MAX);
-    if (0..4).any(odd) {
-        for i in 0..4 {
-            if !(p[i].abs() <= EXP_MAX) {
-                out.0[i] = p[i].exp();
-            }
-            if !(q[i].abs() <= TRIG_MAX) {
-                (out.1[i], out.2[i]) = q[i].sin_cos();
-            }
+/// e^p, sin q, cos q of every element of `p`, `q` into `e`, `s`, `c` (all of one length),
+/// in the widest instruction set ([`pulp::Arch`]).
+pub fn exp_sin_cos_slices(p: &[f64], q: &[f64], e: &mut [f64], s: &mut [f64], c: &mut [f64]) {
+    struct Op<'x> {
+        p: &'x [f64],
+        q: &'x [f64],
+        e: &'x mut [f64],
+        s: &'x mut [f64],
+        c: &'x mut [f64],
+    }
+    impl pulp::WithSimd for Op<'_> {
+        type Output = ();
+        #[inline(always)]
+        fn with_simd<S: pulp::Simd>(self, simd: S) {
+            exp_sin_cos_with(simd, self.p, self.q, self.e, self.s, self.c)
         }
     }
-    out
+    pulp::Arch::new().dispatch(Op { p, q, e, s, c })
 }
 
-/// (e^p, sin q, cos q) of one argument pair: lane 0 of [`exp_sin_cos`] (the same bits).
+/// [`exp_sin_cos_slices`] in the caller's instruction set `simd`: whole vectors, then the
+/// remainder lane by lane (the same arithmetic: the same bits), then the standard library
+/// for arguments out of the vector range.
+#[inline(always)]
+pub fn exp_sin_cos_with<S: pulp::Simd>(
+    simd: S,
+    p: &[f64],
+    q: &[f64],
+    e: &mut [f64],
+    s: &mut [f64],
+    c: &mut [f64],
+) {
+    let n = p.len();
+    let (q, e, s, c) = (&q[..n], &mut e[..n], &mut s[..n], &mut c[..n]);
+    let (pv, pt) = S::as_simd_f64s(p);
+    let (qv, _) = S::as_simd_f64s(q);
+    let (ev, _) = S::as_mut_simd_f64s(e);
+    let (sv, _) = S::as_mut_simd_f64s(s);
+    let (cv, _) = S::as_mut_simd_f64s(c);
+    let nv = pv
+        .len()
+        .min(qv.len())
+        .min(ev.len())
+        .min(sv.len())
+        .min(cv.len());
+    for i in 0..nv {
+        (ev[i], sv[i], cv[i]) = kernel(simd, pv[i], qv[i]);
+    }
+    for i in n - pt.len()..n {
+        let one = pulp::Scalar::new();
+        (e[i], s[i], c[i]) = kernel(one, p[i], q[i]);
+    }
+    for i in 0..n {
+        if !(p[i].abs() <= EXP_MAX) {
+            e[i] = p[i].exp();
+        }
+        if !(q[i].abs() <= TRIG_MAX) {
+            (s[i], c[i]) = q[i].sin_cos();
+        }
+    }
+}
+
+/// (e^p, sin q, cos q) of one argument pair (the same bits as the vector lanes).
 #[inline]
 pub fn exp_sin_cos1(p: f64, q: f64) -> [f64; 3] {
-    let (e, s, c) = exp_sin_cos([p; 4], [q; 4]);
-    [e[0], s[0], c[0]]
-}
-
-/// e^p for |p| ≤ 700 (fdlibm's e_exp.c without its special cases).
-#[inline(always)]
-fn exp4(x: [f64; 4]) -> [f64; 4] {
-    let x = x.map(|v| v.clamp(-EXP_MAX, EXP_MAX));
-    let sum: [f64; 4] = std::array::from_fn(|i| x[i] * INV_LN2 + ROUND);
-    let k: [f64; 4] = sum.map(|s| s - ROUND);
-    let hi: [f64; 4] = std::array::from_fn(|i| x[i] - k[i] * LN2_HI);
-    let lo: [f64; 4] = k.map(|k| k * LN2_LO);
-    let r: [f64; 4] = std::array::from_fn(|i| hi[i] - lo[i]);
-    std::array::from_fn(|i| {
-        let (r, hi, lo) = (r[i], hi[i], lo[i]);
-        let t = r * r;
-        let c = r - t * (P1 + t * (P2 + t * (P3 + t * (P4 + t * P5))));
-        let y = 1.0 - ((lo - (r * c) / (2.0 - c)) - hi);
-        // 2^k from the integer in the low bits of `sum` (two's complement offset).
-        let ki = (sum[i].to_bits() as i64).wrapping_sub(ROUND.to_bits() as i64);
-        let scale = f64::from_bits(((ki + 1023) as u64) << 52);
-        y * scale
-    })
-}
-
-/// (sin q, cos q) for |q| ≤ 10⁶ (fdlibm's medium-size reduction, always to the third part).
-#[inline(always)]
-fn sin_cos4(x: [f64; 4]) -> ([f64; 4], [f64; 4]) {
-    let x = x.map(|v| v.clamp(-TRIG_MAX, TRIG_MAX));
-    let sum: [f64; 4] = std::array::from_fn(|i| x[i] * INV_PIO2 + ROUND);
-    let f: [f64; 4] = sum.map(|s| s - ROUND);
-    let mut s = [0.0; 4];
-    let mut c = [0.0; 4];
-    for i in 0..4 {
-        let fl = f[i];
-        // x − k·pio2_1 is exact (k < 2²⁰, and x is near k·pio2_1); the rest of k π/2,
-        // k·pio2_2 (exact) + k·(pio2_3 + pio2_3t), is taken off in two-sum arithmetic.
-        let t = x[i] - fl * PIO2_1;
-        let wh = fl * PIO2_2;
-        let wl = fl * PIO2_3 + fl * PIO2_3T;
-        let r = t - wh;
-        let bb = r - t;
-        let err = (t - (r - bb)) + (-wh - bb);
-        let tail = err - wl;
-        let y0 = r + tail;
-        let y1 = (r - y0) + tail;
-        // Kernels on [−π/4, π/4] with the tail y1.
-        let z = y0 * y0;
-        let v = z * y0;
-        let rs = S2 + z * (S3 + z * (S4 + z * (S5 + z * S6)));
-        let ks = y0 - ((z * (0.5 * y1 - v * rs) - y1) - v * S1);
-        let zz = z * z;
-        let rc = z * (C1 + z * (C2 + z * C3)) + zz * zz * (C4 + z * (C5 + z * C6));
-        let hz = 0.5 * z;
-        let w1 = 1.0 - hz;
-        let kc = w1 + (((1.0 - w1) - hz) + (z * rc - y0 * y1));
-        let n = sum[i].to_bits() & 3;
-        let (sn, cs) = if n & 1 == 0 { (ks, kc) } else { (kc, ks) };
-        // Quadrant n: (sin, cos) = (ks, kc), (kc, −ks), (−ks, −kc), (−kc, ks).
-        let neg_s = (n >> 1) << 63;
-        let neg_c = (((n + 1) >> 1) & 1) << 63;
-        s[i] = f64::from_bits(sn.to_bits() ^ neg_s);
-        if x[i] == 0.0 {
-            s[i] = x[i]; // sin(±0) = ±0
-        }
-        c[i] = f64::from_bits(cs.to_bits() ^ neg_c);
+    let (mut e, mut s, mut c) = kernel(pulp::Scalar::new(), p, q);
+    if !(p.abs() <= EXP_MAX) {
+        e = p.exp();
     }
-    (s, c)
+    if !(q.abs() <= TRIG_MAX) {
+        (s, c) = q.sin_cos();
+    }
+    [e, s, c]
+}
+
+/// (e^p, sin q, cos q) lane by lane, for |p| ≤ 700 and |q| ≤ 10⁶ (other lanes hold
+/// garbage, replaced by the callers): fdlibm's e_exp.c without its special cases, and its
+/// medium-size reduction (always to the third part of π/2) with k_sin.c and k_cos.c.
+#[inline(always)]
+fn kernel<S: pulp::Simd>(simd: S, p: S::f64s, q: S::f64s) -> (S::f64s, S::f64s, S::f64s) {
+    let k = |x: f64| simd.splat_f64s(x);
+    let add = |a, b| simd.add_f64s(a, b);
+    let sub = |a, b| simd.sub_f64s(a, b);
+    let mul = |a, b| simd.mul_f64s(a, b);
+    let bits = |a| simd.transmute_u64s_f64s(a);
+    let round = k(ROUND);
+
+    // e^p = 2^j e^r, p = j ln 2 + r.
+    let sum = add(mul(p, k(INV_LN2)), round);
+    let j = sub(sum, round);
+    let hi = sub(p, mul(j, k(LN2_HI)));
+    let lo = mul(j, k(LN2_LO));
+    let r = sub(hi, lo);
+    let t = mul(r, r);
+    let poly = add(k(P4), mul(t, k(P5)));
+    let poly = add(k(P3), mul(t, poly));
+    let poly = add(k(P2), mul(t, poly));
+    let poly = add(k(P1), mul(t, poly));
+    let cr = sub(r, mul(t, poly));
+    let ratio = simd.div_f64s(mul(r, cr), sub(k(2.0), cr));
+    let y = sub(k(1.0), sub(sub(lo, ratio), hi));
+    // 2^j from the integer in the low bits of `sum`: (j + 1023) · 2⁵² as bits.
+    let ji = simd.sub_u64s(bits(sum), simd.splat_u64s(ROUND.to_bits()));
+    let biased = simd.add_u64s(ji, simd.splat_u64s(1023));
+    let scale = simd.transmute_f64s_u64s(simd.mul_u64s(biased, simd.splat_u64s(1 << 52)));
+    let e = mul(y, scale);
+
+    // sin, cos: q = n π/2 + (y0 + y1).
+    let sum = add(mul(q, k(INV_PIO2)), round);
+    let f = sub(sum, round);
+    // q − n·pio2_1 is exact (n < 2²⁰, q near n·pio2_1); the rest of n π/2, n·pio2_2 (exact)
+    // + n·(pio2_3 + pio2_3t), is taken off in two-sum arithmetic.
+    let t = sub(q, mul(f, k(PIO2_1)));
+    let wh = mul(f, k(PIO2_2));
+    let wl = add(mul(f, k(PIO2_3)), mul(f, k(PIO2_3T)));
+    let r = sub(t, wh);
+    let bb = sub(r, t);
+    let err = add(sub(t, sub(r, bb)), sub(simd.neg_f64s(wh), bb));
+    let tail = sub(err, wl);
+    let y0 = add(r, tail);
+    let y1 = add(sub(r, y0), tail);
+    // The kernels on [−π/4, π/4] with the tail y1.
+    let z = mul(y0, y0);
+    let v = mul(z, y0);
+    let rs = add(k(S5), mul(z, k(S6)));
+    let rs = add(k(S4), mul(z, rs));
+    let rs = add(k(S3), mul(z, rs));
+    let rs = add(k(S2), mul(z, rs));
+    let ks = sub(
+        y0,
+        sub(
+            sub(mul(z, sub(mul(k(0.5), y1), mul(v, rs))), y1),
+            mul(v, k(S1)),
+        ),
+    );
+    let zz = mul(z, z);
+    let c_lo = add(k(C1), mul(z, add(k(C2), mul(z, k(C3)))));
+    let c_hi = add(k(C4), mul(z, add(k(C5), mul(z, k(C6)))));
+    let rc = add(mul(z, c_lo), mul(mul(zz, zz), c_hi));
+    let hz = mul(k(0.5), z);
+    let w1 = sub(k(1.0), hz);
+    let kc = add(
+        w1,
+        add(sub(sub(k(1.0), w1), hz), sub(mul(z, rc), mul(y0, y1))),
+    );
+    // Quadrant n: (sin, cos) = (ks, kc), (kc, −ks), (−ks, −kc), (−kc, ks).
+    let n = bits(sum);
+    let is = |m: S::u64s, v: u64| {
+        simd.equal_u64s(simd.and_u64s(m, simd.splat_u64s(v)), simd.splat_u64s(v))
+    };
+    let swap = is(n, 1);
+    let sn = simd.select_f64s(swap, kc, ks);
+    let cs = simd.select_f64s(swap, ks, kc);
+    let sn = simd.select_f64s(is(n, 2), simd.neg_f64s(sn), sn);
+    let n1 = simd.add_u64s(n, simd.splat_u64s(1));
+    let cs = simd.select_f64s(is(n1, 2), simd.neg_f64s(cs), cs);
+    // sin(±0) = ±0.
+    let sn = simd.select_f64s(simd.equal_f64s(q, k(0.0)), q, sn);
+    (e, sn, cs)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The slices entry point on four arguments.
+    fn exp_sin_cos(p: [f64; 4], q: [f64; 4]) -> ([f64; 4], [f64; 4], [f64; 4]) {
+        let (mut e, mut s, mut c) = ([0.0; 4], [0.0; 4], [0.0; 4]);
+        exp_sin_cos_slices(&p, &q, &mut e, &mut s, &mut c);
+        (e, s, c)
+    }
 
     /// Distance in units in the last place (of the reference).
     fn ulps(a: f64, b: f64) -> f64 {
