@@ -68,9 +68,9 @@ impl BuildingModes {
     /// [`BuildingModes::padded_floors`] long; the padding receives zeros): the floors in
     /// tiles of 16, 8 or 4 ([`BuildingModes::tiles`]) whose R accumulators stay in registers
     /// while the mode shapes stream by, each floor summed over the modes in mode order from
-    /// 0 (the same sums, in the same order, as a plain loop of `mul_add`), without bounds checks in the
-    /// inner loop. Each term is a fused multiply-add (one rounding: the same bits on every
-    /// machine, in hardware inside the vectorised observation).
+    /// 0 (the same sums, in the same order, as a plain loop of `mul_add`), without bounds
+    /// checks in the inner loop. Each term is a fused multiply-add (one rounding: the same
+    /// bits on every machine, in hardware inside the vectorised observation).
     #[inline(always)]
     fn reconstruct<const R: usize>(&self, q: [&[f64]; R], out: [&mut [f64]; R]) {
         let nm = q[0].len();
