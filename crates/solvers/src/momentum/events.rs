@@ -15,7 +15,7 @@
 use roots::{Convergency, SearchError};
 
 use super::impulse::ContactGeom;
-use super::modal::{Arc, Modal, TrigMemo};
+use super::modal::{Arc, ArcLanes, Modal, TrigMemo};
 
 /// Brent convergence: |Δs| below `tol`, exact zero, iteration count recorded.
 pub struct Conv {
@@ -82,10 +82,25 @@ pub struct Locator<'a> {
     pub iterations: u64,
     /// Per arc: memo of its transcendental values (empty where no evaluation is needed).
     pub memo: &'a mut [TrigMemo],
+    /// The arcs by field (vector evaluation) and a scratch of 2 · [`ArcLanes::padded`].
+    pub lanes: &'a ArcLanes,
+    pub buf: &'a mut [f64],
 }
 
 impl Locator<'_> {
     fn delta(&mut self, s: f64) -> f64 {
+        let np = ArcLanes::padded(self.arcs.len());
+        let (xb, vb) = self.buf.split_at_mut(np);
+        if self.lanes.eval(s, xb, vb, true, false) {
+            // The arcs' values in vectors, summed in mode order (the same bits).
+            let mut d = 0.0;
+            for (g, x) in self.contact.g.iter().zip(xb.iter()) {
+                if *g != 0.0 {
+                    d += g * x;
+                }
+            }
+            return d - self.contact.gap - self.shift;
+        }
         let mut d = 0.0;
         for (n, (g, a)) in self.contact.g.iter().zip(self.arcs).enumerate() {
             if *g != 0.0 {
@@ -96,6 +111,17 @@ impl Locator<'_> {
     }
 
     fn ddelta(&mut self, s: f64) -> f64 {
+        let np = ArcLanes::padded(self.arcs.len());
+        let (xb, vb) = self.buf.split_at_mut(np);
+        if self.lanes.eval(s, xb, vb, false, true) {
+            let mut d = 0.0;
+            for (g, v) in self.contact.g.iter().zip(vb.iter()) {
+                if *g != 0.0 {
+                    d += g * v;
+                }
+            }
+            return d;
+        }
         let mut d = 0.0;
         for (n, (g, a)) in self.contact.g.iter().zip(self.arcs).enumerate() {
             if *g != 0.0 {

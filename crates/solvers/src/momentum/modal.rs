@@ -503,6 +503,139 @@ impl TrigMemo {
     }
 }
 
+/// The arcs of a segment by field (for evaluating all of them at one instant in vectors),
+/// padded with zero arcs to a multiple of 8; the same values as the [`Arc`]s.
+#[derive(Debug, Clone, Default)]
+pub struct ArcLanes {
+    /// Arcs kept (the rest is padding).
+    pub n: usize,
+    neg_c: Vec<f64>,
+    d: Vec<f64>,
+    alpha: Vec<f64>,
+    beta: Vec<f64>,
+    a: Vec<f64>,
+    b: Vec<f64>,
+    /// b·d − c·a and a·d + c·b of [`Arc::v_from`].
+    vc: Vec<f64>,
+    vs: Vec<f64>,
+    /// max ζω and max ω_d over the arcs (the vector range test).
+    max_c: f64,
+    max_d: f64,
+}
+
+impl ArcLanes {
+    /// Lanes of a padded buffer for `n` arcs.
+    pub fn padded(n: usize) -> usize {
+        n.div_ceil(8) * 8
+    }
+
+    /// Takes the arcs' fields.
+    pub fn set(&mut self, arcs: &[Arc]) {
+        let n = arcs.len();
+        let np = Self::padded(n);
+        self.n = n;
+        let field = |v: &mut Vec<f64>, f: &dyn Fn(&Arc) -> f64| {
+            v.clear();
+            v.extend(arcs.iter().map(f));
+            v.resize(np, 0.0);
+        };
+        field(&mut self.neg_c, &|a| -a.c);
+        field(&mut self.d, &|a| a.d);
+        field(&mut self.alpha, &|a| a.alpha);
+        field(&mut self.beta, &|a| a.beta);
+        field(&mut self.a, &|a| a.a);
+        field(&mut self.b, &|a| a.b);
+        field(&mut self.vc, &|a| a.b * a.d - a.c * a.a);
+        field(&mut self.vs, &|a| a.a * a.d + a.c * a.b);
+        self.max_c = arcs.iter().fold(0.0, |m, a| m.max(a.c));
+        self.max_d = arcs.iter().fold(0.0, |m, a| m.max(a.d));
+    }
+
+    /// q_n(s) (`want_x`) and q̇_n(s) (`want_v`) of every arc into `x`, `v` (at least
+    /// [`ArcLanes::padded`] long): the same bits as [`Arc::x_from`] and [`Arc::v_from`] with
+    /// [`Arc::trig`], in vectors. False (and nothing written) where s is out of the vector
+    /// kernel's range ([`super::trig`]): the caller evaluates the arcs one by one.
+    pub fn eval(&self, s: f64, x: &mut [f64], v: &mut [f64], want_x: bool, want_v: bool) -> bool {
+        if !(self.max_c * s.abs() <= super::trig::EXP_MAX
+            && self.max_d * s.abs() <= super::trig::TRIG_MAX)
+        {
+            return false;
+        }
+        struct Op<'x> {
+            l: &'x ArcLanes,
+            s: f64,
+            x: &'x mut [f64],
+            v: &'x mut [f64],
+            want: (bool, bool),
+        }
+        impl pulp::WithSimd for Op<'_> {
+            type Output = ();
+            #[inline(always)]
+            fn with_simd<S: pulp::Simd>(self, simd: S) {
+                self.l.eval_with(simd, self.s, self.x, self.v, self.want)
+            }
+        }
+        pulp::Arch::new().dispatch(Op {
+            l: self,
+            s,
+            x,
+            v,
+            want: (want_x, want_v),
+        });
+        true
+    }
+
+    #[inline(always)]
+    fn eval_with<S: pulp::Simd>(
+        &self,
+        simd: S,
+        s: f64,
+        x: &mut [f64],
+        v: &mut [f64],
+        (want_x, want_v): (bool, bool),
+    ) {
+        let np = self.neg_c.len();
+        let sv = simd.splat_f64s(s);
+        fn f<S: pulp::Simd>(w: &[f64], np: usize) -> &[S::f64s] {
+            S::as_simd_f64s(&w[..np]).0
+        }
+        let (nc, d) = (f::<S>(&self.neg_c, np), f::<S>(&self.d, np));
+        let (al, be) = (f::<S>(&self.alpha, np), f::<S>(&self.beta, np));
+        let (a, b) = (f::<S>(&self.a, np), f::<S>(&self.b, np));
+        let (vc, vs) = (f::<S>(&self.vc, np), f::<S>(&self.vs, np));
+        let (xo, _) = S::as_mut_simd_f64s(&mut x[..np]);
+        let (vo, _) = S::as_mut_simd_f64s(&mut v[..np]);
+        let m = nc
+            .len()
+            .min(d.len())
+            .min(al.len())
+            .min(be.len())
+            .min(a.len());
+        let m = m
+            .min(b.len())
+            .min(vc.len())
+            .min(vs.len())
+            .min(xo.len())
+            .min(vo.len());
+        for i in 0..m {
+            let p = simd.mul_f64s(nc[i], sv);
+            let q = simd.mul_f64s(d[i], sv);
+            let (e, sn, cs) = super::trig::kernel(simd, p, q);
+            if want_x {
+                // α + β s + e (a cos + b sin)
+                let h = simd.add_f64s(simd.mul_f64s(a[i], cs), simd.mul_f64s(b[i], sn));
+                let lin = simd.add_f64s(al[i], simd.mul_f64s(be[i], sv));
+                xo[i] = simd.add_f64s(lin, simd.mul_f64s(e, h));
+            }
+            if want_v {
+                // β + e ((b d − c a) cos − (a d + c b) sin)
+                let hd = simd.sub_f64s(simd.mul_f64s(vc[i], cs), simd.mul_f64s(vs[i], sn));
+                vo[i] = simd.add_f64s(be[i], simd.mul_f64s(e, hd));
+            }
+        }
+    }
+}
+
 /// The exact free-plus-linear-load solution of one mode over one segment (see module docs).
 #[derive(Debug, Clone, Copy)]
 pub struct Arc {

@@ -17,7 +17,7 @@ use structure::Scene;
 use super::energy::EnergyAccount;
 use super::events::Locator;
 pub use super::impact::ImpactDiagnostics;
-use super::modal::{Arc, TrigMemo};
+use super::modal::{Arc, ArcLanes, TrigMemo};
 use super::peaks;
 pub use super::problem::{Problem, MAX_SUB, SIMULTANEOUS};
 use crate::overlap::OverlapTracker;
@@ -112,6 +112,10 @@ pub struct Stepper<'a> {
     pub(super) trig_end: Vec<[f64; 3]>,
     /// Per arc: memo of [`Arc::trig`] (cleared when the arcs are rebuilt).
     pub(super) memo: Vec<TrigMemo>,
+    /// The arcs by field, for the event location's evaluations in vectors, and its
+    /// scratch (2 · [`ArcLanes::padded`]).
+    pub(super) lanes: ArcLanes,
+    pub(super) lane_buf: Vec<f64>,
     /// Floor displacements and velocities at the current and at the previous sample, per
     /// building. These four
     /// buffers hold a leading zero (the ground) before the padded floors: floor i is at
@@ -332,6 +336,8 @@ impl<'a> Stepper<'a> {
             arcs: Vec::with_capacity(nm),
             trig_end: vec![[0.0; 3]; nm],
             memo: vec![TrigMemo::EMPTY; nm],
+            lanes: ArcLanes::default(),
+            lane_buf: vec![0.0; 2 * ArcLanes::padded(nm)],
             ud: p
                 .modal
                 .buildings
@@ -897,6 +903,8 @@ impl<'a> Stepper<'a> {
                         shift: 0.0,
                         iterations: 0,
                         memo: &mut self.memo,
+                        lanes: &self.lanes,
+                        buf: &mut self.lane_buf,
                     };
                     if !loc.surely_open(prev.0, prev.1, cur.0, cur.1) {
                         return Ok(None);
@@ -942,6 +950,7 @@ impl<'a> Stepper<'a> {
                 tau,
             ));
         }
+        self.lanes.set(&self.arcs);
     }
 
     /// The state at the end τ of the arcs' segment into `xn`, `vn` (and `trig_end`).
@@ -1027,6 +1036,8 @@ impl<'a> Stepper<'a> {
                     shift,
                     iterations: 0,
                     memo: &mut self.memo,
+                    lanes: &self.lanes,
+                    buf: &mut self.lane_buf,
                 };
                 r = loc.locate(prev.0, prev.1, cur.0, cur.1);
                 self.stats.root_iterations += loc.iterations;

@@ -54,9 +54,9 @@ const C5: f64 = 2.08757232129817482790e-09;
 const C6: f64 = -1.13596475577881948265e-11;
 
 /// Largest |p| of the vector exp (k stays a normal exponent).
-const EXP_MAX: f64 = 700.0;
+pub const EXP_MAX: f64 = 700.0;
 /// Largest |q| of the vector reduction (k < 2²⁰: the products k · PIO2_i are exact).
-const TRIG_MAX: f64 = 1.0e6;
+pub const TRIG_MAX: f64 = 1.0e6;
 
 /// e^p, sin q, cos q of every element of `p`, `q` into `e`, `s`, `c` (all of one length),
 /// in the widest instruction set ([`pulp::Arch`]).
@@ -137,7 +137,7 @@ pub fn exp_sin_cos1(p: f64, q: f64) -> [f64; 3] {
 /// garbage, replaced by the callers): fdlibm's e_exp.c without its special cases, and its
 /// medium-size reduction (always to the third part of π/2) with k_sin.c and k_cos.c.
 #[inline(always)]
-fn kernel<S: pulp::Simd>(simd: S, p: S::f64s, q: S::f64s) -> (S::f64s, S::f64s, S::f64s) {
+pub fn kernel<S: pulp::Simd>(simd: S, p: S::f64s, q: S::f64s) -> (S::f64s, S::f64s, S::f64s) {
     let k = |x: f64| simd.splat_f64s(x);
     let add = |a, b| simd.add_f64s(a, b);
     let sub = |a, b| simd.sub_f64s(a, b);
