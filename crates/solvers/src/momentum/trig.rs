@@ -21,20 +21,24 @@
 //! handed to the standard library lane by lane; the momentum method never produces them
 //! for a physical scene (|p| = ζωs, |q| = ω_d s over one record step).
 
+// fdlibm's constants as it publishes them (decimal strings that round to its doubles);
+// `!(x <= max)` is the range test that NaN fails.
+#![allow(clippy::excessive_precision, clippy::neg_cmp_op_on_partial_ord)]
+
 /// 1.5 · 2⁵²: adding and subtracting it rounds |x| < 2⁵¹ to the nearest integer (ties to
 /// even), and the sum's low mantissa bits hold that integer.
 const ROUND: f64 = 6755399441055744.0;
 
 const LN2_HI: f64 = 6.93147180369123816490e-01;
 const LN2_LO: f64 = 1.90821492927058770002e-10;
-const INV_LN2: f64 = 1.44269504088896338700e+00;
+const INV_LN2: f64 = std::f64::consts::LOG2_E; // fdlibm's invln2, the same double
 const P1: f64 = 1.66666666666666019037e-01;
 const P2: f64 = -2.77777777770155933842e-03;
 const P3: f64 = 6.61375632143793436117e-05;
 const P4: f64 = -1.65339022054652515390e-06;
 const P5: f64 = 4.13813679705723846039e-08;
 
-const INV_PIO2: f64 = 6.36619772367581382433e-01;
+const INV_PIO2: f64 = std::f64::consts::FRAC_2_PI; // fdlibm's invpio2, the same double
 const PIO2_1: f64 = 1.57079632673412561417e+00;
 const PIO2_2: f64 = 6.07710050630396597660e-11;
 const PIO2_3: f64 = 2.02226624871116645580e-21;
