@@ -51,7 +51,7 @@ impl BuildingModes {
 
     /// Floor displacements u = Φ q (or velocities from q̇) of this building into `out`
     /// (at least [`BuildingModes::padded_floors`] long).
-    #[inline]
+    #[inline(always)]
     pub fn to_floors(&self, q: &[f64], out: &mut [f64]) {
         let q = &q[self.range.clone()];
         self.reconstruct([q], [out]);

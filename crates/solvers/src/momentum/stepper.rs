@@ -537,9 +537,22 @@ impl<'a> Stepper<'a> {
     /// The velocities changed without a sample (an impulse): the next interval's rates at its
     /// start are the new ones.
     pub(super) fn refresh_rates(&mut self) {
-        for (b, bm) in self.p.modal.buildings.iter().enumerate() {
-            bm.to_floors(&self.s.v, &mut self.ud_prev[b][1..]);
+        // In the widest instruction set (the reconstruction's fused multiply-adds inline).
+        struct Op<'s, 'a> {
+            st: &'s mut Stepper<'a>,
         }
+        impl pulp::WithSimd for Op<'_, '_> {
+            type Output = ();
+            #[inline(always)]
+            fn with_simd<S: pulp::Simd>(self, _: S) {
+                let st = self.st;
+                for (b, bm) in st.p.modal.buildings.iter().enumerate() {
+                    bm.to_floors(&st.s.v, &mut st.ud_prev[b][1..]);
+                }
+            }
+        }
+        let arch = self.arch;
+        arch.dispatch(Op { st: self })
     }
 
     /// Peak story shears and floor displacements per building.
