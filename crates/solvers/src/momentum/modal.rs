@@ -307,15 +307,17 @@ pub fn propagate<const W: usize>(
         let (x0, v0) = (x[n], v[n]);
         let x1 = c[0][n] * x0 + c[1][n] * v0 + c[4][n] * f0 + c[5][n] * f1;
         let v1 = c[2][n] * x0 + c[3][n] * v0 + c[6][n] * f0 + c[7][n] * f1;
-        let ix = (0.5 * (f0 + f1) * h - (v1 - v0) - c[8][n] * (x1 - x0)) * c[9][n];
+        // The energies with fused multiply-adds (they do not feed back into the motion).
+        let (dx, dv) = (x1 - x0, v1 - v0);
+        let ix = (-c[8][n]).mul_add(dx, 0.5 * (f0 + f1) * h - dv) * c[9][n];
         let q = |i: usize| c[11 + i][n];
         out[0][n] = x1;
         out[1][n] = v1;
-        out[2][n] = f0 * (x1 - x0) + (f1 - f0) * (x1 - ix * inv_h);
-        out[3][n] = x0 * (q(0) * x0 + q(1) * v0 + q(2) * f0 + q(3) * f1)
-            + v0 * (q(4) * v0 + q(5) * f0 + q(6) * f1)
-            + f0 * (q(7) * f0 + q(8) * f1)
-            + q(9) * f1 * f1;
+        out[2][n] = f0.mul_add(dx, (f1 - f0) * ix.mul_add(-inv_h, x1));
+        let t1 = q(3).mul_add(f1, q(2).mul_add(f0, q(1).mul_add(v0, q(0) * x0)));
+        let t2 = q(6).mul_add(f1, q(5).mul_add(f0, q(4) * v0));
+        let t3 = q(8).mul_add(f1, q(7) * f0);
+        out[3][n] = x0.mul_add(t1, v0.mul_add(t2, f0.mul_add(t3, q(9) * f1 * f1)));
     }
     out
 }
