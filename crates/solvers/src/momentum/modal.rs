@@ -536,21 +536,33 @@ impl ArcLanes {
         let n = arcs.len();
         let np = Self::padded(n);
         self.n = n;
-        let field = |v: &mut Vec<f64>, f: &dyn Fn(&Arc) -> f64| {
+        for v in [
+            &mut self.neg_c,
+            &mut self.d,
+            &mut self.alpha,
+            &mut self.beta,
+            &mut self.a,
+            &mut self.b,
+            &mut self.vc,
+            &mut self.vs,
+        ] {
             v.clear();
-            v.extend(arcs.iter().map(f));
             v.resize(np, 0.0);
-        };
-        field(&mut self.neg_c, &|a| -a.c);
-        field(&mut self.d, &|a| a.d);
-        field(&mut self.alpha, &|a| a.alpha);
-        field(&mut self.beta, &|a| a.beta);
-        field(&mut self.a, &|a| a.a);
-        field(&mut self.b, &|a| a.b);
-        field(&mut self.vc, &|a| a.b * a.d - a.c * a.a);
-        field(&mut self.vs, &|a| a.a * a.d + a.c * a.b);
-        self.max_c = arcs.iter().fold(0.0, |m, a| m.max(a.c));
-        self.max_d = arcs.iter().fold(0.0, |m, a| m.max(a.d));
+        }
+        let (mut max_c, mut max_d) = (0.0f64, 0.0f64);
+        for (i, a) in arcs.iter().enumerate() {
+            self.neg_c[i] = -a.c;
+            self.d[i] = a.d;
+            self.alpha[i] = a.alpha;
+            self.beta[i] = a.beta;
+            self.a[i] = a.a;
+            self.b[i] = a.b;
+            self.vc[i] = a.b * a.d - a.c * a.a;
+            self.vs[i] = a.a * a.d + a.c * a.b;
+            max_c = max_c.max(a.c);
+            max_d = max_d.max(a.d);
+        }
+        (self.max_c, self.max_d) = (max_c, max_d);
     }
 
     /// q_n(s) (`want_x`) and q̇_n(s) (`want_v`) of every arc into `x`, `v` (at least
