@@ -247,6 +247,16 @@ pub struct StepCoeffs {
     /// Damping work 2ζω ∫₀ʰ q̇² ds as a quadratic form in z = (q₀, q̇₀, f₀, f₁): the 10 upper
     /// coefficients (off-diagonal ones doubled), order 00 01 02 03 11 12 13 22 23 33.
     pub dq: [Vec<f64>; 10],
+    /// The step's energies folded for the fast step, with f = −Γ a_g: per mode, the input
+    /// work's terms in q₀ and q̇₀, W = q₀(p₀ a₀ + p₁ a₁) + q̇₀(p₂ a₀ + p₃ a₁) + (a·a terms),
+    /// and the damping work's, D = q₀(d₀₀ q₀ + d₀₁ q̇₀ + r₀ a₀ + r₁ a₁) + q̇₀(d₁₁ q̇₀ + r₂ a₀
+    /// + r₃ a₁) + (a·a terms): `ew` = [p₀, p₁, p₂, p₃], `ed` = [d₀₀, d₀₁, d₁₁, r₀, r₁, r₂, r₃].
+    pub ew: [Vec<f64>; 4],
+    pub ed: [Vec<f64>; 7],
+    /// The a·a terms summed over the modes: input work and damping work per unit of a₀²,
+    /// a₀a₁ and a₁² (the fast step accumulates Σ a₀², Σ a₀a₁, Σ a₁² over its steps).
+    pub aa_input: [f64; 3],
+    pub aa_damping: [f64; 3],
     /// The same coefficients interleaved by chunks of 4 modes (the fast-step kernel
     /// [`propagate`]), the modes past the last full chunk in a last chunk padded with zero
     /// coefficients (its padding lanes compute zeros and are never read; used with fewer
@@ -259,26 +269,24 @@ pub struct StepCoeffs {
 }
 
 /// Step coefficients of W consecutive modes, field by field (see [`StepCoeffs`]): a00 a01
-/// a10 a11 b00 b01 b10 b11, 2ζω, 1/ω², Γ, then the 10 damping-form coefficients.
+/// a10 a11 b00 b01 b10 b11, Γ, the input-work coefficients `ew` (4), the damping-work
+/// coefficients `ed` (7).
 #[derive(Debug, Clone)]
 pub struct StepBlock<const W: usize> {
-    pub c: [[f64; W]; 21],
+    pub c: [[f64; W]; 20],
 }
 
 impl<const W: usize> StepBlock<W> {
     /// Modes `first` … `first + count − 1` (count ≤ W; the other lanes zero).
     fn gather(c: &StepCoeffs, gamma: &[f64], first: usize, count: usize) -> Self {
-        let fields: [&[f64]; 11] = [
-            &c.a00, &c.a01, &c.a10, &c.a11, &c.b00, &c.b01, &c.b10, &c.b11, &c.two_zw, &c.inv_w2,
-            gamma,
+        let fields: [&[f64]; 9] = [
+            &c.a00, &c.a01, &c.a10, &c.a11, &c.b00, &c.b01, &c.b10, &c.b11, gamma,
         ];
-        let mut out = StepBlock { c: [[0.0; W]; 21] };
+        let mut out = StepBlock { c: [[0.0; W]; 20] };
         for k in 0..count {
-            for (f, src) in fields.iter().enumerate() {
+            let all = fields.iter().copied().chain(c.ew.iter().map(Vec::as_slice));
+            for (f, src) in all.chain(c.ed.iter().map(Vec::as_slice)).enumerate() {
                 out.c[f][k] = src[first + k];
-            }
-            for (q, src) in c.dq.iter().enumerate() {
-                out.c[11 + q][k] = src[first + k];
             }
         }
         out
@@ -286,9 +294,11 @@ impl<const W: usize> StepBlock<W> {
 }
 
 /// One full step of W modes from (x, v) under the ground acceleration a0 → a1 over h:
-/// [x₁, v₁, input work, damping work] (the fast path of the stepper; the same arithmetic,
-/// in the same order, per mode as the scalar formulas: Nigam–Jennings propagator,
-/// [`load_work`], the damping quadratic form).
+/// [x₁, v₁, input work, damping work] without the a·a terms of the two works (those are
+/// summed over the modes once, [`StepCoeffs::aa_input`]); the state by the Nigam–Jennings
+/// propagator (the same arithmetic, in the same order, per mode as the scalar formula), the
+/// works by their coefficients ([`StepCoeffs::ew`], [`StepCoeffs::ed`]) with fused
+/// multiply-adds (they do not feed back into the motion).
 #[inline(always)]
 pub fn propagate<const W: usize>(
     blk: &StepBlock<W>,
@@ -296,28 +306,25 @@ pub fn propagate<const W: usize>(
     v: [f64; W],
     a0: f64,
     a1: f64,
-    h: f64,
 ) -> [[f64; W]; 4] {
     let c = &blk.c;
-    let inv_h = 1.0 / h;
     let mut out = [[0.0; W]; 4];
     for n in 0..W {
-        let f0 = -c[10][n] * a0;
-        let f1 = -c[10][n] * a1;
+        let f0 = -c[8][n] * a0;
+        let f1 = -c[8][n] * a1;
         let (x0, v0) = (x[n], v[n]);
         let x1 = c[0][n] * x0 + c[1][n] * v0 + c[4][n] * f0 + c[5][n] * f1;
         let v1 = c[2][n] * x0 + c[3][n] * v0 + c[6][n] * f0 + c[7][n] * f1;
-        // The energies with fused multiply-adds (they do not feed back into the motion).
-        let (dx, dv) = (x1 - x0, v1 - v0);
-        let ix = (-c[8][n]).mul_add(dx, 0.5 * (f0 + f1) * h - dv) * c[9][n];
-        let q = |i: usize| c[11 + i][n];
         out[0][n] = x1;
         out[1][n] = v1;
-        out[2][n] = f0.mul_add(dx, (f1 - f0) * ix.mul_add(-inv_h, x1));
-        let t1 = q(3).mul_add(f1, q(2).mul_add(f0, q(1).mul_add(v0, q(0) * x0)));
-        let t2 = q(6).mul_add(f1, q(5).mul_add(f0, q(4) * v0));
-        let t3 = q(8).mul_add(f1, q(7) * f0);
-        out[3][n] = x0.mul_add(t1, v0.mul_add(t2, f0.mul_add(t3, q(9) * f1 * f1)));
+        let k = |i: usize| c[9 + i][n];
+        let wx = k(1).mul_add(a1, k(0) * a0);
+        let wv = k(3).mul_add(a1, k(2) * a0);
+        out[2][n] = x0.mul_add(wx, v0 * wv);
+        let d = |i: usize| c[13 + i][n];
+        let dx = d(4).mul_add(a1, d(3).mul_add(a0, d(1).mul_add(v0, d(0) * x0)));
+        let dv = d(6).mul_add(a1, d(5).mul_add(a0, d(2) * v0));
+        out[3][n] = x0.mul_add(dx, v0 * dv);
     }
     out
 }
@@ -338,11 +345,19 @@ impl StepCoeffs {
             two_zw: vec![0.0; nm],
             inv_w2: vec![0.0; nm],
             dq: Default::default(),
+            ew: Default::default(),
+            ed: Default::default(),
+            aa_input: [0.0; 3],
+            aa_damping: [0.0; 3],
             blocks: Vec::new(),
             tail: None,
             last: None,
         };
-        for q in c.dq.iter_mut() {
+        for q in
+            c.dq.iter_mut()
+                .chain(c.ew.iter_mut())
+                .chain(c.ed.iter_mut())
+        {
             *q = vec![0.0; nm];
         }
         for n in 0..nm {
@@ -385,6 +400,34 @@ impl StepCoeffs {
                     k += 1;
                 }
             }
+            // The input work f₀Δq + (f₁ − f₀)(q₁ − ∫q/h) ([`load_work`]) with the linear forms
+            // over z = (q₀, q̇₀, f₀, f₁): Δq = DX·z, Δq̇ = DV·z, ∫q = IX·z, q₁ − ∫q/h = Y·z;
+            // W = f₀ DX·z + (f₁ − f₀) Y·z.
+            let dx = [p.a[0][0] - 1.0, p.a[0][1], p.b[0][0], p.b[0][1]];
+            let dv = [p.a[1][0], p.a[1][1] - 1.0, p.b[1][0], p.b[1][1]];
+            let load = [0.0, 0.0, 0.5 * h, 0.5 * h];
+            let ix: [f64; 4] =
+                std::array::from_fn(|i| (load[i] - dv[i] - c.two_zw[n] * dx[i]) * c.inv_w2[n]);
+            let y: [f64; 4] =
+                std::array::from_fn(|i| (if i == 0 { 1.0 } else { 0.0 }) + dx[i] - ix[i] / h);
+            let g = modal.gamma[n];
+            // f = −Γ a: a q-term carries −Γ, an a·a term Γ².
+            c.ew[0][n] = -g * (dx[0] - y[0]);
+            c.ew[1][n] = -g * y[0];
+            c.ew[2][n] = -g * (dx[1] - y[1]);
+            c.ew[3][n] = -g * y[1];
+            let g2 = g * g;
+            c.aa_input[0] += g2 * (dx[2] - y[2]);
+            c.aa_input[1] += g2 * (dx[3] + y[2] - y[3]);
+            c.aa_input[2] += g2 * y[3];
+            let q = |i: usize| c.dq[i][n];
+            let ed = [q(0), q(1), q(4), -g * q(2), -g * q(3), -g * q(5), -g * q(6)];
+            for (e, v) in c.ed.iter_mut().zip(ed) {
+                e[n] = v;
+            }
+            c.aa_damping[0] += g2 * q(7);
+            c.aa_damping[1] += g2 * q(8);
+            c.aa_damping[2] += g2 * q(9);
         }
         let n4 = nm / 4 * 4;
         c.blocks = (0..n4 / 4)

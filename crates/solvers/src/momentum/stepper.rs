@@ -94,6 +94,9 @@ pub struct Stepper<'a> {
     pub(super) dmp_acc: Vec<f64>,
     /// The sums including the step being tried (exchanged with the sums on acceptance).
     pub(super) win_step: Vec<f64>,
+    /// Σ a₀², Σ a₀a₁, Σ a₁² over the accepted fast steps (the works' a·a terms,
+    /// [`super::modal::StepCoeffs::aa_input`]).
+    pub(super) aa_acc: [f64; 3],
     pub(super) dmp_step: Vec<f64>,
     /// g·x of the first contact at the fast step's start, summed as `delta_fast` does.
     pub(super) delta0: f64,
@@ -216,7 +219,7 @@ fn propagate_chunk(
     (xn, vn): (&mut [f64], &mut [f64]),
     (wacc, dacc): (&[f64], &[f64]),
     (win, dmp): (&mut [f64], &mut [f64]),
-    (a0, a1, h): (f64, f64, f64),
+    (a0, a1): (f64, f64),
     (w2, et): (&[f64], &mut [f64]),
 ) {
     let (xc, vc, wc): ([f64; 4], [f64; 4], [f64; 4]) = (
@@ -227,7 +230,7 @@ fn propagate_chunk(
     // The terms of 2E at the start (as `observe::twice_energy`).
     let terms: [f64; 4] = std::array::from_fn(|i| vc[i] * vc[i] + wc[i] * xc[i] * xc[i]);
     et[r.clone()].copy_from_slice(&terms);
-    let out = super::modal::propagate::<4>(blk, xc, vc, a0, a1, h);
+    let out = super::modal::propagate::<4>(blk, xc, vc, a0, a1);
     xn[r.clone()].copy_from_slice(&out[0]);
     vn[r.clone()].copy_from_slice(&out[1]);
     // (All loads before the stores: the buffers are not known to be distinct.)
@@ -299,6 +302,7 @@ impl<'a> Stepper<'a> {
             win_acc: vec![0.0; nm],
             dmp_acc: vec![0.0; nm],
             win_step: vec![0.0; nm],
+            aa_acc: [0.0; 3],
             dmp_step: vec![0.0; nm],
             delta0: 0.0,
             e_terms: vec![0.0; nm],
@@ -775,7 +779,7 @@ impl<'a> Stepper<'a> {
                     (xn, vn),
                     (wacc, dacc),
                     (win, dmp),
-                    (a0, a1, h),
+                    (a0, a1),
                     (w2, &mut *et),
                 );
             }
@@ -793,7 +797,7 @@ impl<'a> Stepper<'a> {
                     (xn, vn),
                     (wacc, dacc),
                     (win, dmp),
-                    (a0, a1, h),
+                    (a0, a1),
                     (w2, &mut *et),
                 );
             } else if let Some(tail) = &c.tail {
@@ -802,7 +806,7 @@ impl<'a> Stepper<'a> {
                 let lane = |s: &[f64], i: usize| if i < t { s[n4 + i] } else { 0.0 };
                 let xt: [f64; 4] = std::array::from_fn(|i| lane(x, i));
                 let vt: [f64; 4] = std::array::from_fn(|i| lane(v, i));
-                let out = super::modal::propagate::<4>(tail, xt, vt, a0, a1, h);
+                let out = super::modal::propagate::<4>(tail, xt, vt, a0, a1);
                 for i in 0..4 {
                     if i < t {
                         let n = n4 + i;
@@ -937,6 +941,8 @@ impl<'a> Stepper<'a> {
         // Energy of the accepted step only (a step with a possible event is discarded).
         std::mem::swap(&mut self.win_acc, &mut self.win_step);
         std::mem::swap(&mut self.dmp_acc, &mut self.dmp_step);
+        let aa = &mut self.aa_acc;
+        (aa[0], aa[1], aa[2]) = (aa[0] + a0 * a0, aa[1] + a0 * a1, aa[2] + a1 * a1);
         self.finish_grid(j, t_end);
         self.count_step(h)?;
         self.interval.tau_done = h;
@@ -1130,8 +1136,12 @@ impl<'a> Stepper<'a> {
                 context: "modal state at the end of the analysis".into(),
             });
         }
-        self.energy.input += self.win_acc.iter().sum::<f64>();
-        self.energy.damping += self.dmp_acc.iter().sum::<f64>();
+        // The fast steps' works: per mode, plus the a·a terms of all modes at once.
+        let (aa, c) = (self.aa_acc, &self.p.full);
+        let dot = |k: &[f64; 3]| k[0] * aa[0] + k[1] * aa[1] + k[2] * aa[2];
+        self.energy.input += self.win_acc.iter().sum::<f64>() + dot(&c.aa_input);
+        self.energy.damping += self.dmp_acc.iter().sum::<f64>() + dot(&c.aa_damping);
+        self.aa_acc = [0.0; 3];
         self.win_acc.fill(0.0);
         self.dmp_acc.fill(0.0);
         self.resolve_deferred();
