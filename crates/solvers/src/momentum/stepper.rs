@@ -102,6 +102,8 @@ pub struct Stepper<'a> {
     pub(super) delta0: f64,
     /// Per mode q̇² + ω² q² at the start of the fast step (the terms of 2E).
     pub(super) e_terms: Vec<f64>,
+    /// Per building: its modes as chunks of `e_terms` (padded with zeros to whole chunks).
+    pub(super) energy_spans: Vec<ChunkSpan>,
     /// The fast path found that base step j needs the closed form (state unchanged since).
     pub(super) fast_rejected: Option<usize>,
     /// Scratch of the fast step's interior checks: per mode the δ and δ̇ terms (before g).
@@ -188,24 +190,52 @@ pub struct Stepper<'a> {
     pub(super) overlap_turn: Vec<f64>,
 }
 
-/// Σ t as [`super::observe::twice_energy`] sums its terms: four lane sums over chunks of
-/// 4 from the start, the remainder into lane 0, then (l₀ + l₁) + (l₂ + l₃).
-#[inline(always)]
-fn lane_sum(t: &[f64]) -> f64 {
-    let n = t.len();
-    let n4 = n / 4 * 4;
-    let mut acc = [0.0f64; 4];
-    let mut i = 0;
-    while i < n4 {
-        let c: [f64; 4] = t[i..i + 4].try_into().unwrap();
-        acc = std::array::from_fn(|k| acc[k] + c[k]);
-        i += 4;
+/// The modes of one building as chunks of four of the fast step's per-mode buffers: chunks
+/// `k0 ..= k1` (modes 4k0 … 4k1 + 3), the lanes of the first and the last that belong to the
+/// building as masks (all ones or zeros).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct ChunkSpan {
+    k0: usize,
+    k1: usize,
+    head: [u64; 4],
+    tail: [u64; 4],
+}
+
+impl ChunkSpan {
+    fn new(r: std::ops::Range<usize>) -> ChunkSpan {
+        let (k0, k1) = (r.start / 4, (r.end.max(r.start + 1) - 1) / 4);
+        let lane = |ok: bool| if ok { u64::MAX } else { 0 };
+        ChunkSpan {
+            k0,
+            k1,
+            head: std::array::from_fn(|i| lane(4 * k0 + i >= r.start)),
+            tail: std::array::from_fn(|i| lane(4 * k1 + i < r.end)),
+        }
     }
-    let mut l0 = acc[0];
-    for &tk in &t[n4..] {
-        l0 += tk;
+
+    /// Σ of the span's terms in `t` (padded to whole chunks): four lane sums over the chunks,
+    /// then (l₀ + l₁) + (l₂ + l₃).
+    #[inline(always)]
+    fn sum(&self, t: &[f64]) -> f64 {
+        let masked = |c: &[f64], m: [u64; 4]| -> [f64; 4] {
+            std::array::from_fn(|i| f64::from_bits(c[i].to_bits() & m[i]))
+        };
+        let s = &t[4 * self.k0..4 * self.k1 + 4];
+        let mut acc;
+        if self.k0 == self.k1 {
+            let m = std::array::from_fn(|i| self.head[i] & self.tail[i]);
+            acc = masked(s, m);
+        } else {
+            acc = masked(&s[..4], self.head);
+            let inner = &s[4..s.len() - 4];
+            for c in inner.chunks_exact(4) {
+                acc = std::array::from_fn(|i| acc[i] + c[i]);
+            }
+            let last = masked(&s[s.len() - 4..], self.tail);
+            acc = std::array::from_fn(|i| acc[i] + last[i]);
+        }
+        (acc[0] + acc[1]) + (acc[2] + acc[3])
     }
-    (l0 + acc[1]) + (acc[2] + acc[3])
 }
 
 /// One chunk of 4 modes `r` of the fast step: the new state into (xn, vn), the energy sums
@@ -305,7 +335,13 @@ impl<'a> Stepper<'a> {
             aa_acc: [0.0; 3],
             dmp_step: vec![0.0; nm],
             delta0: 0.0,
-            e_terms: vec![0.0; nm],
+            e_terms: vec![0.0; nm.div_ceil(4) * 4],
+            energy_spans: p
+                .modal
+                .buildings
+                .iter()
+                .map(|bm| ChunkSpan::new(bm.range.clone()))
+                .collect(),
             fast_rejected: None,
             check_d: vec![0.0; nm],
             check_dd: vec![0.0; nm],
@@ -825,10 +861,11 @@ impl<'a> Stepper<'a> {
         // Per building 2E_b = Σ (q̇² + ω² q²) over its modes (kept for the observation's
         // energy envelope of this interval), and their sum for the contact bound.
         let mut e2 = 0.0;
-        for (b, bm) in p.modal.buildings.iter().enumerate() {
-            // (= observe::twice_energy: the same terms, summed alike)
-            let e = lane_sum(&self.e_terms[bm.range.clone()]);
-            self.env_e2[b] = e;
+        for (span, env) in self.energy_spans.iter().zip(self.env_e2.iter_mut()) {
+            // The terms of `observe::twice_energy`, summed by aligned chunks (another order:
+            // the bounds that use 2E_b carry margins for its round-off).
+            let e = span.sum(&self.e_terms);
+            *env = e;
             e2 += e;
         }
         self.env_e2_fresh = true;
