@@ -88,11 +88,12 @@ impl Stepper<'_> {
             if turns && len > 0.0 {
                 // The rare slow path, in the order floor 0 displacement, story 0 shear,
                 // floor 1 …: each quantity whose rate changes sign (the set bits of the
-                // words of `sample`, lowest first), through the filter of
-                // `interior_extremum`.
+                // words of `sample`, lowest first) and that passes the first filter of
+                // `interior_extremum` (decided here for all of them at once: the slow path
+                // of one quantity changes nothing that filter reads for another).
                 let groups = self.disp_max[b].len().div_ceil(TURN_GROUP);
                 for g in 0..groups {
-                    let mut w = self.flags[g].to_bits();
+                    let mut w = self.cubic_filter(b, g, len);
                     while w != 0 {
                         let t = w.trailing_zeros() as usize;
                         w &= w - 1;
@@ -256,6 +257,44 @@ impl Stepper<'_> {
         } else {
             (up[i + 1], udp[i + 1], u[i + 1], ud[i + 1])
         }
+    }
+
+    /// The set bits of turn word `g` of building `b` (see [`sample`]) whose quantity passes
+    /// the first filter of [`Stepper::interior_extremum`] (the same values, the same test).
+    #[inline(never)]
+    fn cubic_filter(&self, b: usize, g: usize, len: f64) -> u64 {
+        let mut w = self.flags[g].to_bits();
+        let mut keep = w;
+        let (u, ud, up, udp) = (&self.u[b], &self.ud[b], &self.u_prev[b], &self.ud_prev[b]);
+        let (dm, dl) = (&self.disp_max[b], &self.disp_lower[b]);
+        let (sm, sl, k) = (&self.shear_max[b], &self.shear_lower[b], &self.stiffness[b]);
+        let c = 4.0 / 27.0 * len;
+        while w != 0 {
+            let t = w.trailing_zeros() as usize;
+            w &= w - 1;
+            let i = g * TURN_GROUP + t / 2;
+            let ((y0, yd0, y1, yd1), peak) = if t & 1 == 1 {
+                let k = k[i];
+                (
+                    (
+                        k * (up[i + 1] - up[i]),
+                        k * (udp[i + 1] - udp[i]),
+                        k * (u[i + 1] - u[i]),
+                        k * (ud[i + 1] - ud[i]),
+                    ),
+                    sm[i].max(sl[i]),
+                )
+            } else {
+                (
+                    (up[i + 1], udp[i + 1], u[i + 1], ud[i + 1]),
+                    dm[i].max(dl[i]),
+                )
+            };
+            if cubic_bound(y0, yd0, y1, yd1, c) * (1.0 + 1e-9) < 0.9 * peak {
+                keep &= !(1 << t);
+            }
+        }
+        keep
     }
 
     /// The slow path of one flagged quantity of building `b` (floor displacement `i`, or
