@@ -181,17 +181,25 @@ impl Stepper<'_> {
         let amax = iv.a0.abs().max(iv.a1.abs());
         let mut any = false;
         let fresh = std::mem::take(&mut self.env_e2_fresh);
-        for (b, bm) in p.modal.buildings.iter().enumerate() {
-            let e2 = if fresh {
-                self.env_e2[b]
-            } else {
-                twice_energy(&iv.x0, &iv.v0, &p.omega2, bm.range.clone())
-            };
+        if !fresh {
+            // 2E_b not given by the fast path: computed here, into the same buffer.
+            for (e2, bm) in self.env_e2.iter_mut().zip(&p.modal.buildings) {
+                *e2 = twice_energy(&iv.x0, &iv.v0, &p.omega2, bm.range.clone());
+            }
+        }
+        let nb = p.modal.buildings.len();
+        let (r, skip) = (&mut self.env_r[..nb], &mut self.skip[..nb]);
+        let (e2, gamma, thr) = (
+            &self.env_e2[..nb],
+            &self.env_gamma[..nb],
+            &self.env_thr[..nb],
+        );
+        for b in 0..nb {
             // A relative margin of 1e-9 covers the round-off of the bound itself.
-            let rb = (e2.sqrt() + len * self.env_gamma[b] * amax) * (1.0 + 1e-9);
-            self.env_r[b] = rb;
-            self.skip[b] = rb < self.env_thr[b];
-            any |= self.skip[b];
+            let rb = (e2[b].sqrt() + len * gamma[b] * amax) * (1.0 + 1e-9);
+            r[b] = rb;
+            skip[b] = rb < thr[b];
+            any |= skip[b];
         }
         if self.overlaps.is_empty() {
             return true;
