@@ -218,18 +218,37 @@ pub fn amplitudes(
     iv: &Interval,
     out: &mut [f64],
 ) {
+    let r = range;
+    let (gamma, k, out) = (&modal.gamma[r.clone()], &k[r.clone()], &mut out[r.clone()]);
+    let (x0, v0) = (&iv.x0[r.clone()], &iv.v0[r.clone()]);
+    match iv.fc.as_deref() {
+        Some(f) => amplitudes_of(gamma, k, x0, v0, |n| f[r.start + n], iv, out),
+        None => amplitudes_of(gamma, k, x0, v0, |_| 0.0, iv, out),
+    }
+}
+
+/// [`amplitudes`] over slices of the same modes (`extra(n)`: the held-contact load).
+#[inline(always)]
+fn amplitudes_of(
+    gamma: &[f64],
+    k: &[[f64; 3]],
+    x0: &[f64],
+    v0: &[f64],
+    extra: impl Fn(usize) -> f64,
+    iv: &Interval,
+    out: &mut [f64],
+) {
     let inv_tau = 1.0 / iv.tau;
-    for n in range {
-        let extra = iv.fc.as_ref().map_or(0.0, |f| f[n]);
-        let (f0, f1) = (
-            -modal.gamma[n] * iv.a0 + extra,
-            -modal.gamma[n] * iv.a1 + extra,
-        );
+    let nm = out.len();
+    let (gamma, k, x0, v0) = (&gamma[..nm], &k[..nm], &x0[..nm], &v0[..nm]);
+    for n in 0..nm {
+        let extra = extra(n);
+        let (f0, f1) = (-gamma[n] * iv.a0 + extra, -gamma[n] * iv.a1 + extra);
         let [inv_w2, c, inv_d] = k[n];
         let beta = (f1 - f0) * inv_tau * inv_w2;
         let alpha = (f0 - 2.0 * c * beta) * inv_w2;
-        let a = iv.x0[n] - alpha;
-        let b = (iv.v0[n] - beta + c * a) * inv_d;
+        let a = x0[n] - alpha;
+        let b = (v0[n] - beta + c * a) * inv_d;
         out[n] = (a * a + b * b).sqrt();
     }
 }
@@ -239,9 +258,15 @@ pub fn amplitudes(
 /// homogeneous part, amplitudes `amp` of all modes from [`amplitudes`]; the particular
 /// part is linear in time).
 pub fn hermite_error_bound(modal: &Modal, first: usize, c: &[f64], amp: &[f64], len: f64) -> f64 {
+    let n = c.len().min(amp.len() - first);
+    let (c, amp, omega) = (
+        &c[..n],
+        &amp[first..first + n],
+        &modal.omega[first..first + n],
+    );
     let mut d4 = 0.0;
-    for (m, (cm, a)) in c.iter().zip(&amp[first..]).enumerate() {
-        let w2 = modal.omega[first + m] * modal.omega[first + m];
+    for ((cm, a), w) in c.iter().zip(amp).zip(omega) {
+        let w2 = w * w;
         d4 += cm.abs() * w2 * w2 * a;
     }
     len.powi(4) / 384.0 * d4
@@ -297,3 +322,4 @@ pub fn refine_at(
     }
     (s, y)
 }
+
