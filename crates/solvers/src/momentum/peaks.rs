@@ -182,13 +182,16 @@ impl Deferred {
     /// Candidates in the order they are to be refined: decreasing upper bound (stable, so
     /// chronological among equal bounds).
     pub fn order(&self) -> Vec<usize> {
-        let mut o: Vec<usize> = (0..self.candidates.len()).collect();
-        o.sort_by(|&a, &b| {
-            self.candidates[b]
-                .upper
-                .total_cmp(&self.candidates[a].upper)
-        });
-        o
+        // Sorted by (key descending, index ascending), the key ordered as `f64::total_cmp`
+        // orders the bounds: the permutation of the stable sort by decreasing bound.
+        let mut o: Vec<(i64, usize)> = (self.candidates.iter().enumerate())
+            .map(|(k, c)| {
+                let bits = c.upper.to_bits() as i64;
+                (!(bits ^ (((bits >> 63) as u64) >> 1) as i64), k)
+            })
+            .collect();
+        o.sort_unstable();
+        o.into_iter().map(|(_, k)| k).collect()
     }
 }
 
@@ -323,3 +326,42 @@ pub fn refine_at(
     (s, y)
 }
 
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `Deferred::order` is the stable sort by decreasing upper bound under `total_cmp`.
+    #[test]
+    fn order_is_the_stable_sort() {
+        let mut d = Deferred::new(1);
+        let mut x = 12345u64;
+        let special = [
+            0.0,
+            -0.0,
+            1.0,
+            -1.0,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+        ];
+        for k in 0..500 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let upper = match k % 4 {
+                0 => special[(x % 7) as usize],
+                1 => (x % 5) as f64 - 2.0,
+                _ => f64::from_bits(x),
+            };
+            d.candidates.push(Candidate {
+                target: Target::Overlap { pair: k },
+                interval: 0,
+                s0: 0.0,
+                upper,
+            });
+        }
+        let mut want: Vec<usize> = (0..d.candidates.len()).collect();
+        want.sort_by(|&a, &b| d.candidates[b].upper.total_cmp(&d.candidates[a].upper));
+        assert_eq!(d.order(), want);
+    }
+}
