@@ -267,10 +267,25 @@ pub fn hermite_error_bound(modal: &Modal, first: usize, c: &[f64], amp: &[f64], 
         &amp[first..first + n],
         &modal.omega[first..first + n],
     );
-    let mut d4 = 0.0;
-    for ((cm, a), w) in c.iter().zip(amp).zip(omega) {
+    let term = |cm: f64, a: f64, w: f64| {
         let w2 = w * w;
-        d4 += cm.abs() * w2 * w2 * a;
+        cm.abs() * w2 * w2 * a
+    };
+    // The terms four at a time (independent: they vectorise), summed in mode order.
+    let mut d4 = 0.0;
+    let n4 = n / 4 * 4;
+    for ((c4, a4), w4) in (c[..n4].chunks_exact(4))
+        .zip(amp[..n4].chunks_exact(4))
+        .zip(omega[..n4].chunks_exact(4))
+    {
+        let t: [f64; 4] = std::array::from_fn(|k| term(c4[k], a4[k], w4[k]));
+        d4 += t[0];
+        d4 += t[1];
+        d4 += t[2];
+        d4 += t[3];
+    }
+    for ((&cm, &a), &w) in c[n4..].iter().zip(&amp[n4..]).zip(&omega[n4..]) {
+        d4 += term(cm, a, w);
     }
     len.powi(4) / 384.0 * d4
 }
