@@ -564,6 +564,25 @@ impl pulp::WithSimd for OverlapPass<'_, '_> {
             simd.less_than_f64s(one, zero),
         );
         let (mut turns, mut raised) = (false, false);
+        // One vector of pairs (a macro, not a closure: closures do not inherit the
+        // instruction set).
+        macro_rules! pass {
+            ($max:expr, $time:expr, $flag:expr, $ul:expr, $ur:expr, $vl:expr, $vr:expr, $pl:expr, $pr:expr) => {{
+                let (max, time, flag) = ($max, $time, $flag);
+                let y1 = simd.sub_f64s($ul, $ur);
+                let up = simd.greater_than_f64s(y1, *max);
+                *max = simd.select_f64s(up, y1, *max);
+                *time = simd.select_f64s(up, nowv, *time);
+                let turn = simd.and_m64s(
+                    simd.greater_than_f64s(simd.sub_f64s($pl, $pr), zero),
+                    simd.less_than_f64s(simd.sub_f64s($vl, $vr), zero),
+                );
+                *flag = simd.select_f64s(turn, one, zero);
+                tv = simd.or_m64s(tv, turn);
+                rv = simd.or_m64s(rv, up);
+            }};
+        }
+        let lanes = std::mem::size_of::<S::f64s>() / std::mem::size_of::<f64>();
         for run in &st.overlap_runs {
             let (n, k0) = (run.n, run.k0);
             let (i0, j0) = (run.i0 + 1, run.j0 + 1); // the leading zero of the buffers
@@ -573,44 +592,57 @@ impl pulp::WithSimd for OverlapPass<'_, '_> {
             let (max, mt) = S::as_mut_simd_f64s(&mut ov.max[k0..k0 + n]);
             let (time, tt) = S::as_mut_simd_f64s(&mut ov.time[k0..k0 + n]);
             let (flag, ft) = S::as_mut_simd_f64s(&mut st.overlap_turn[k0..k0 + n]);
-            let (ul, ult) = S::as_simd_f64s(ul);
-            let (ur, urt) = S::as_simd_f64s(ur);
-            let (vl, vlt) = S::as_simd_f64s(vl);
-            let (vr, vrt) = S::as_simd_f64s(vr);
-            let (pl, plt) = S::as_simd_f64s(pl);
-            let (pr, prt) = S::as_simd_f64s(pr);
+            let (ulv, ult) = S::as_simd_f64s(ul);
+            let (urv, urt) = S::as_simd_f64s(ur);
+            let (vlv, vlt) = S::as_simd_f64s(vl);
+            let (vrv, vrt) = S::as_simd_f64s(vr);
+            let (plv, plt) = S::as_simd_f64s(pl);
+            let (prv, prt) = S::as_simd_f64s(pr);
             for ((((((((max, time), flag), ul), ur), vl), vr), pl), pr) in max
                 .iter_mut()
                 .zip(time.iter_mut())
                 .zip(flag.iter_mut())
-                .zip(ul)
-                .zip(ur)
-                .zip(vl)
-                .zip(vr)
-                .zip(pl)
-                .zip(pr)
+                .zip(ulv)
+                .zip(urv)
+                .zip(vlv)
+                .zip(vrv)
+                .zip(plv)
+                .zip(prv)
             {
-                let y1 = simd.sub_f64s(*ul, *ur);
-                let up = simd.greater_than_f64s(y1, *max);
-                *max = simd.select_f64s(up, y1, *max);
-                *time = simd.select_f64s(up, nowv, *time);
-                let turn = simd.and_m64s(
-                    simd.greater_than_f64s(simd.sub_f64s(*pl, *pr), zero),
-                    simd.less_than_f64s(simd.sub_f64s(*vl, *vr), zero),
-                );
-                *flag = simd.select_f64s(turn, one, zero);
-                tv = simd.or_m64s(tv, turn);
-                rv = simd.or_m64s(rv, up);
+                pass!(max, time, flag, *ul, *ur, *vl, *vr, *pl, *pr);
             }
-            for t in 0..mt.len() {
-                let y1 = ult[t] - urt[t];
-                let up = y1 > mt[t];
-                mt[t] = if up { y1 } else { mt[t] };
-                tt[t] = if up { now } else { tt[t] };
-                let turn = (plt[t] - prt[t] > 0.0) & (vlt[t] - vrt[t] < 0.0);
-                ft[t] = if turn { 1.0 } else { 0.0 };
-                turns |= turn;
-                raised |= up;
+            if !mt.is_empty() && n >= lanes {
+                // The last `lanes` pairs as one more vector, overlapping the previous one:
+                // a pair seen twice is left as it was (its maximum already holds y1, the
+                // same flag is written again), so this is the scalar loop below.
+                let o = n - lanes;
+                let v = |x: &[f64]| S::as_simd_f64s(&x[o..]).0[0];
+                let (max, _) = S::as_mut_simd_f64s(&mut ov.max[k0 + o..k0 + n]);
+                let (time, _) = S::as_mut_simd_f64s(&mut ov.time[k0 + o..k0 + n]);
+                let (flag, _) = S::as_mut_simd_f64s(&mut st.overlap_turn[k0 + o..k0 + n]);
+                let (ul, ur, vl, vr, pl, pr) = (v(ul), v(ur), v(vl), v(vr), v(pl), v(pr));
+                pass!(
+                    &mut max[0],
+                    &mut time[0],
+                    &mut flag[0],
+                    ul,
+                    ur,
+                    vl,
+                    vr,
+                    pl,
+                    pr
+                );
+            } else {
+                for t in 0..mt.len() {
+                    let y1 = ult[t] - urt[t];
+                    let up = y1 > mt[t];
+                    mt[t] = if up { y1 } else { mt[t] };
+                    tt[t] = if up { now } else { tt[t] };
+                    let turn = (plt[t] - prt[t] > 0.0) & (vlt[t] - vrt[t] < 0.0);
+                    ft[t] = if turn { 1.0 } else { 0.0 };
+                    turns |= turn;
+                    raised |= up;
+                }
             }
         }
         (turns | any(simd, tv), raised | any(simd, rv))
