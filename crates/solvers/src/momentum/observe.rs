@@ -273,9 +273,13 @@ impl Stepper<'_> {
     fn cubic_filter(&self, b: usize, g: usize, len: f64) -> u64 {
         let mut w = self.flags[g].to_bits();
         let mut keep = w;
-        let (u, ud, up, udp) = (&self.u[b], &self.ud[b], &self.u_prev[b], &self.ud_prev[b]);
-        let (dm, dl) = (&self.disp_max[b], &self.disp_lower[b]);
-        let (sm, sl, k) = (&self.shear_max[b], &self.shear_lower[b], &self.stiffness[b]);
+        // (Slices cut once: their bounds in registers.)
+        let n = self.disp_max[b].len();
+        let (u, ud) = (&self.u[b][..=n], &self.ud[b][..=n]);
+        let (up, udp) = (&self.u_prev[b][..=n], &self.ud_prev[b][..=n]);
+        let (dm, dl) = (&self.disp_max[b][..n], &self.disp_lower[b][..n]);
+        let (sm, sl) = (&self.shear_max[b][..n], &self.shear_lower[b][..n]);
+        let k = &self.stiffness[b][..n];
         let c = 4.0 / 27.0 * len;
         while w != 0 {
             let t = w.trailing_zeros() as usize;
