@@ -87,22 +87,18 @@ impl Stepper<'_> {
             self.env_stale[b] |= raised;
             if turns && len > 0.0 {
                 // The rare slow path, in the order floor 0 displacement, story 0 shear,
-                // floor 1 …: each quantity whose rate changes sign, through the filter of
-                // `interior_extremum`.
-                let n = self.disp_max[b].len();
-                for i0 in (0..n).step_by(4) {
-                    let (d, s) = (arr::<4>(&self.flags, i0), arr::<4>(&self.flags, n + i0));
-                    let bits = |a: &[f64; 4]| a.iter().fold(0, |m, x| m | x.to_bits());
-                    if bits(d) | bits(s) == 0 {
-                        continue;
-                    }
-                    for i in i0..i0 + 4 {
-                        if self.flags[i] != 0.0 {
-                            self.interior_extremum(b, i, false, len, &mut stored);
-                        }
-                        if self.flags[n + i] != 0.0 {
-                            self.interior_extremum(b, i, true, len, &mut stored);
-                        }
+                // floor 1 …: each quantity whose rate changes sign (the set bits of the
+                // words of `sample`, lowest first) and that passes the first filter of
+                // `interior_extremum` (decided here for all of them at once: the slow path
+                // of one quantity changes nothing that filter reads for another).
+                let groups = self.disp_max[b].len().div_ceil(TURN_GROUP);
+                for g in 0..groups {
+                    let mut w = self.cubic_filter(b, g, len);
+                    while w != 0 {
+                        let t = w.trailing_zeros() as usize;
+                        w &= w - 1;
+                        let i = g * TURN_GROUP + t / 2;
+                        self.interior_extremum(b, i, t & 1 == 1, len, &mut stored);
                     }
                 }
             }
@@ -185,17 +181,25 @@ impl Stepper<'_> {
         let amax = iv.a0.abs().max(iv.a1.abs());
         let mut any = false;
         let fresh = std::mem::take(&mut self.env_e2_fresh);
-        for (b, bm) in p.modal.buildings.iter().enumerate() {
-            let e2 = if fresh {
-                self.env_e2[b]
-            } else {
-                twice_energy(&iv.x0, &iv.v0, &p.omega2, bm.range.clone())
-            };
+        if !fresh {
+            // 2E_b not given by the fast path: computed here, into the same buffer.
+            for (e2, bm) in self.env_e2.iter_mut().zip(&p.modal.buildings) {
+                *e2 = twice_energy(&iv.x0, &iv.v0, &p.omega2, bm.range.clone());
+            }
+        }
+        let nb = p.modal.buildings.len();
+        let (r, skip) = (&mut self.env_r[..nb], &mut self.skip[..nb]);
+        let (e2, gamma, thr) = (
+            &self.env_e2[..nb],
+            &self.env_gamma[..nb],
+            &self.env_thr[..nb],
+        );
+        for b in 0..nb {
             // A relative margin of 1e-9 covers the round-off of the bound itself.
-            let rb = (e2.sqrt() + len * self.env_gamma[b] * amax) * (1.0 + 1e-9);
-            self.env_r[b] = rb;
-            self.skip[b] = rb < self.env_thr[b];
-            any |= self.skip[b];
+            let rb = (e2[b].sqrt() + len * gamma[b] * amax) * (1.0 + 1e-9);
+            r[b] = rb;
+            skip[b] = rb < thr[b];
+            any |= skip[b];
         }
         if self.overlaps.is_empty() {
             return true;
@@ -261,6 +265,48 @@ impl Stepper<'_> {
         } else {
             (up[i + 1], udp[i + 1], u[i + 1], ud[i + 1])
         }
+    }
+
+    /// The set bits of turn word `g` of building `b` (see [`sample`]) whose quantity passes
+    /// the first filter of [`Stepper::interior_extremum`] (the same values, the same test).
+    #[inline(never)]
+    fn cubic_filter(&self, b: usize, g: usize, len: f64) -> u64 {
+        let mut w = self.flags[g].to_bits();
+        let mut keep = w;
+        // (Slices cut once: their bounds in registers.)
+        let n = self.disp_max[b].len();
+        let (u, ud) = (&self.u[b][..=n], &self.ud[b][..=n]);
+        let (up, udp) = (&self.u_prev[b][..=n], &self.ud_prev[b][..=n]);
+        let (dm, dl) = (&self.disp_max[b][..n], &self.disp_lower[b][..n]);
+        let (sm, sl) = (&self.shear_max[b][..n], &self.shear_lower[b][..n]);
+        let k = &self.stiffness[b][..n];
+        let c = 4.0 / 27.0 * len;
+        while w != 0 {
+            let t = w.trailing_zeros() as usize;
+            w &= w - 1;
+            let i = g * TURN_GROUP + t / 2;
+            let ((y0, yd0, y1, yd1), peak) = if t & 1 == 1 {
+                let k = k[i];
+                (
+                    (
+                        k * (up[i + 1] - up[i]),
+                        k * (udp[i + 1] - udp[i]),
+                        k * (u[i + 1] - u[i]),
+                        k * (ud[i + 1] - ud[i]),
+                    ),
+                    sm[i].max(sl[i]),
+                )
+            } else {
+                (
+                    (up[i + 1], udp[i + 1], u[i + 1], ud[i + 1]),
+                    dm[i].max(dl[i]),
+                )
+            };
+            if cubic_bound(y0, yd0, y1, yd1, c) * (1.0 + 1e-9) < 0.9 * peak {
+                keep &= !(1 << t);
+            }
+        }
+        keep
     }
 
     /// The slow path of one flagged quantity of building `b` (floor displacement `i`, or
@@ -495,12 +541,6 @@ impl Stepper<'_> {
     }
 }
 
-/// `x[t..t + W]` as an array.
-#[inline(always)]
-fn arr<const W: usize>(x: &[f64], t: usize) -> &[f64; W] {
-    x[t..t + W].try_into().unwrap()
-}
-
 /// The first pass of the overlap audit over every pair (see [`Stepper::observe_overlaps`]),
 /// in vectors of the widest instruction set: the running maxima (and their times) of
 /// u_left − u_right, and whether each pair's rate turns from + to − over the interval
@@ -528,6 +568,25 @@ impl pulp::WithSimd for OverlapPass<'_, '_> {
             simd.less_than_f64s(one, zero),
         );
         let (mut turns, mut raised) = (false, false);
+        // One vector of pairs (a macro, not a closure: closures do not inherit the
+        // instruction set).
+        macro_rules! pass {
+            ($max:expr, $time:expr, $flag:expr, $ul:expr, $ur:expr, $vl:expr, $vr:expr, $pl:expr, $pr:expr) => {{
+                let (max, time, flag) = ($max, $time, $flag);
+                let y1 = simd.sub_f64s($ul, $ur);
+                let up = simd.greater_than_f64s(y1, *max);
+                *max = simd.select_f64s(up, y1, *max);
+                *time = simd.select_f64s(up, nowv, *time);
+                let turn = simd.and_m64s(
+                    simd.greater_than_f64s(simd.sub_f64s($pl, $pr), zero),
+                    simd.less_than_f64s(simd.sub_f64s($vl, $vr), zero),
+                );
+                *flag = simd.select_f64s(turn, one, zero);
+                tv = simd.or_m64s(tv, turn);
+                rv = simd.or_m64s(rv, up);
+            }};
+        }
+        let lanes = std::mem::size_of::<S::f64s>() / std::mem::size_of::<f64>();
         for run in &st.overlap_runs {
             let (n, k0) = (run.n, run.k0);
             let (i0, j0) = (run.i0 + 1, run.j0 + 1); // the leading zero of the buffers
@@ -537,44 +596,57 @@ impl pulp::WithSimd for OverlapPass<'_, '_> {
             let (max, mt) = S::as_mut_simd_f64s(&mut ov.max[k0..k0 + n]);
             let (time, tt) = S::as_mut_simd_f64s(&mut ov.time[k0..k0 + n]);
             let (flag, ft) = S::as_mut_simd_f64s(&mut st.overlap_turn[k0..k0 + n]);
-            let (ul, ult) = S::as_simd_f64s(ul);
-            let (ur, urt) = S::as_simd_f64s(ur);
-            let (vl, vlt) = S::as_simd_f64s(vl);
-            let (vr, vrt) = S::as_simd_f64s(vr);
-            let (pl, plt) = S::as_simd_f64s(pl);
-            let (pr, prt) = S::as_simd_f64s(pr);
+            let (ulv, ult) = S::as_simd_f64s(ul);
+            let (urv, urt) = S::as_simd_f64s(ur);
+            let (vlv, vlt) = S::as_simd_f64s(vl);
+            let (vrv, vrt) = S::as_simd_f64s(vr);
+            let (plv, plt) = S::as_simd_f64s(pl);
+            let (prv, prt) = S::as_simd_f64s(pr);
             for ((((((((max, time), flag), ul), ur), vl), vr), pl), pr) in max
                 .iter_mut()
                 .zip(time.iter_mut())
                 .zip(flag.iter_mut())
-                .zip(ul)
-                .zip(ur)
-                .zip(vl)
-                .zip(vr)
-                .zip(pl)
-                .zip(pr)
+                .zip(ulv)
+                .zip(urv)
+                .zip(vlv)
+                .zip(vrv)
+                .zip(plv)
+                .zip(prv)
             {
-                let y1 = simd.sub_f64s(*ul, *ur);
-                let up = simd.greater_than_f64s(y1, *max);
-                *max = simd.select_f64s(up, y1, *max);
-                *time = simd.select_f64s(up, nowv, *time);
-                let turn = simd.and_m64s(
-                    simd.greater_than_f64s(simd.sub_f64s(*pl, *pr), zero),
-                    simd.less_than_f64s(simd.sub_f64s(*vl, *vr), zero),
-                );
-                *flag = simd.select_f64s(turn, one, zero);
-                tv = simd.or_m64s(tv, turn);
-                rv = simd.or_m64s(rv, up);
+                pass!(max, time, flag, *ul, *ur, *vl, *vr, *pl, *pr);
             }
-            for t in 0..mt.len() {
-                let y1 = ult[t] - urt[t];
-                let up = y1 > mt[t];
-                mt[t] = if up { y1 } else { mt[t] };
-                tt[t] = if up { now } else { tt[t] };
-                let turn = (plt[t] - prt[t] > 0.0) & (vlt[t] - vrt[t] < 0.0);
-                ft[t] = if turn { 1.0 } else { 0.0 };
-                turns |= turn;
-                raised |= up;
+            if !mt.is_empty() && n >= lanes {
+                // The last `lanes` pairs as one more vector, overlapping the previous one:
+                // a pair seen twice is left as it was (its maximum already holds y1, the
+                // same flag is written again), so this is the scalar loop below.
+                let o = n - lanes;
+                let v = |x: &[f64]| S::as_simd_f64s(&x[o..]).0[0];
+                let (max, _) = S::as_mut_simd_f64s(&mut ov.max[k0 + o..k0 + n]);
+                let (time, _) = S::as_mut_simd_f64s(&mut ov.time[k0 + o..k0 + n]);
+                let (flag, _) = S::as_mut_simd_f64s(&mut st.overlap_turn[k0 + o..k0 + n]);
+                let (ul, ur, vl, vr, pl, pr) = (v(ul), v(ur), v(vl), v(vr), v(pl), v(pr));
+                pass!(
+                    &mut max[0],
+                    &mut time[0],
+                    &mut flag[0],
+                    ul,
+                    ur,
+                    vl,
+                    vr,
+                    pl,
+                    pr
+                );
+            } else {
+                for t in 0..mt.len() {
+                    let y1 = ult[t] - urt[t];
+                    let up = y1 > mt[t];
+                    mt[t] = if up { y1 } else { mt[t] };
+                    tt[t] = if up { now } else { tt[t] };
+                    let turn = (plt[t] - prt[t] > 0.0) & (vlt[t] - vrt[t] < 0.0);
+                    ft[t] = if turn { 1.0 } else { 0.0 };
+                    turns |= turn;
+                    raised |= up;
+                }
             }
         }
         (turns | any(simd, tv), raised | any(simd, rv))
@@ -620,12 +692,32 @@ struct Sample<'s> {
     k: &'s [f64],
 }
 
+/// Floors per word of turn bits of [`sample`].
+const TURN_GROUP: usize = 32;
+
+/// The turn bit of the displacement of floor f of a group (1 << 2f) and of its story
+/// shear (1 << (2f + 1)), as f64 bit patterns (for vector selects and ors, bitwise only).
+static TURN_D: [f64; TURN_GROUP] = turn_bits(0);
+static TURN_S: [f64; TURN_GROUP] = turn_bits(1);
+
+const fn turn_bits(story: u32) -> [f64; TURN_GROUP] {
+    let mut w = [0.0; TURN_GROUP];
+    let mut f = 0;
+    while f < TURN_GROUP {
+        w[f] = f64::from_bits(1 << (2 * f as u32 + story));
+        f += 1;
+    }
+    w
+}
+
 /// The sample of one building, branch-free over its (padded) floors in vectors of `simd`:
 /// the running peaks of |u_i| and |V_i| = |k_i (u_i − u_{i−1})| (`dm`, `sm`), and which
 /// quantities' rates ẏ change sign over the interval (rare: only those may have an interior
-/// extremum, [`Stepper::interior_extremum`]): `turn` receives −1 (turns) or 0 per floor
-/// displacement, then per story shear. Returns (a peak was raised, some rate changes sign).
-/// The padding floors are zeros and never raise or flag anything.
+/// extremum, [`Stepper::interior_extremum`]): `turn` receives, as u64 bit patterns, one
+/// word per group of [`TURN_GROUP`] floors whose bit 2f is set if the displacement of
+/// floor f of the group turns and bit 2f + 1 if its story shear does. Returns (a peak was
+/// raised, some rate changes sign). The padding floors are zeros and never raise or flag
+/// anything.
 #[inline(always)]
 fn sample<S: pulp::Simd>(
     simd: S,
@@ -635,11 +727,8 @@ fn sample<S: pulp::Simd>(
     turn: &mut [f64],
 ) -> (bool, bool) {
     let n = dm.len();
-    let (td, ts) = turn[..2 * n].split_at_mut(n);
     let (dm, dmt) = S::as_mut_simd_f64s(dm);
     let (sm, smt) = S::as_mut_simd_f64s(&mut sm[..n]);
-    let (td, tdt) = S::as_mut_simd_f64s(td);
-    let (ts, tst) = S::as_mut_simd_f64s(ts);
     let (u, ut) = S::as_simd_f64s(&s.u[1..=n]);
     let (below, belowt) = S::as_simd_f64s(&s.u[..n]);
     let (ud, udt) = S::as_simd_f64s(&s.ud[1..=n]);
@@ -647,34 +736,78 @@ fn sample<S: pulp::Simd>(
     let (udp, udpt) = S::as_simd_f64s(&s.udp[1..=n]);
     let (pbelow, pbelowt) = S::as_simd_f64s(&s.udp[..n]);
     let (k, kt) = S::as_simd_f64s(&s.k[..n]);
+    let (wd, _) = S::as_simd_f64s(&TURN_D);
+    let (ws, _) = S::as_simd_f64s(&TURN_S);
     let m = dm.len();
-    let (sm, td, ts) = (&mut sm[..m], &mut td[..m], &mut ts[..m]);
+    let sm = &mut sm[..m];
     let (u, below, ud, vbelow) = (&u[..m], &below[..m], &ud[..m], &vbelow[..m]);
     let (udp, pbelow, k) = (&udp[..m], &pbelow[..m], &k[..m]);
     let (zero, one) = (simd.splat_f64s(0.0), simd.splat_f64s(1.0));
-    let mone = simd.splat_f64s(-1.0);
-    let (mut rv, mut tv) = (
-        simd.less_than_f64s(one, zero),
-        simd.less_than_f64s(one, zero),
-    );
-    for i in 0..m {
-        let d = simd.abs_f64s(u[i]);
-        let up = simd.greater_than_f64s(d, dm[i]);
-        dm[i] = simd.select_f64s(up, d, dm[i]);
-        let vs = simd.abs_f64s(simd.mul_f64s(k[i], simd.sub_f64s(u[i], below[i])));
-        let us = simd.greater_than_f64s(vs, sm[i]);
-        sm[i] = simd.select_f64s(us, vs, sm[i]);
-        rv = simd.or_m64s(rv, simd.or_m64s(up, us));
-        // A rate that changes sign over the interval (rare): the slow path runs only then.
-        let r0 = simd.mul_f64s(k[i], simd.sub_f64s(udp[i], pbelow[i]));
-        let r1 = simd.mul_f64s(k[i], simd.sub_f64s(ud[i], vbelow[i]));
-        let d_turn = simd.less_than_f64s(simd.mul_f64s(udp[i], ud[i]), zero);
-        let s_turn = simd.less_than_f64s(simd.mul_f64s(r0, r1), zero);
-        td[i] = simd.select_f64s(d_turn, mone, zero);
-        ts[i] = simd.select_f64s(s_turn, mone, zero);
-        tv = simd.or_m64s(tv, simd.or_m64s(d_turn, s_turn));
+    let mut rv = simd.less_than_f64s(one, zero);
+    // Vector i of the floors: its peaks, and its turn bits (weights `wd`, `ws`).
+    // (A macro, not a closure: closures do not inherit the instruction set.)
+    macro_rules! step {
+        ($i:expr, $wd:expr, $ws:expr) => {{
+            let i = $i;
+            let d = simd.abs_f64s(u[i]);
+            let up = simd.greater_than_f64s(d, dm[i]);
+            dm[i] = simd.select_f64s(up, d, dm[i]);
+            let vs = simd.abs_f64s(simd.mul_f64s(k[i], simd.sub_f64s(u[i], below[i])));
+            let us = simd.greater_than_f64s(vs, sm[i]);
+            sm[i] = simd.select_f64s(us, vs, sm[i]);
+            rv = simd.or_m64s(rv, simd.or_m64s(up, us));
+            // A rate that changes sign over the interval (rare): the slow path runs only then.
+            let r0 = simd.mul_f64s(k[i], simd.sub_f64s(udp[i], pbelow[i]));
+            let r1 = simd.mul_f64s(k[i], simd.sub_f64s(ud[i], vbelow[i]));
+            let d_turn = simd.less_than_f64s(simd.mul_f64s(udp[i], ud[i]), zero);
+            let s_turn = simd.less_than_f64s(simd.mul_f64s(r0, r1), zero);
+            simd.or_f64s(
+                simd.select_f64s(d_turn, $wd, zero),
+                simd.select_f64s(s_turn, $ws, zero),
+            )
+        }};
     }
-    let (mut raised, mut turns) = (false, false);
+    macro_rules! word {
+        ($acc:expr) => {{
+            let acc = $acc;
+            let lanes: &[u64] = pulp::bytemuck::cast_slice(std::slice::from_ref(&acc));
+            lanes.iter().fold(0, |a, &x| a | x)
+        }};
+    }
+    // Vectors per word (the lanes divide TURN_GROUP).
+    let per = wd.len();
+    let mut any_turn = 0;
+    let words = if m <= per {
+        // One word (buildings of up to TURN_GROUP floors).
+        let (wd, ws) = (&wd[..m], &ws[..m]);
+        let mut acc = zero;
+        for i in 0..m {
+            acc = simd.or_f64s(acc, step!(i, wd[i], ws[i]));
+        }
+        let w = word!(acc);
+        turn[0] = f64::from_bits(w);
+        any_turn |= w;
+        1
+    } else {
+        let mut g = 0;
+        for g0 in (0..m).step_by(per) {
+            let mut acc = zero;
+            for i in g0..(g0 + per).min(m) {
+                acc = simd.or_f64s(acc, step!(i, wd[i - g0], ws[i - g0]));
+            }
+            let w = word!(acc);
+            turn[g] = f64::from_bits(w);
+            any_turn |= w;
+            g += 1;
+        }
+        g
+    };
+    let mut raised = false;
+    if !dmt.is_empty() {
+        // The floors past the vectors (their words from 0 if not begun above).
+        turn[words..n.div_ceil(TURN_GROUP)].fill(0.0);
+    }
+    let f0 = n - dmt.len(); // the first floor of the tail
     for i in 0..dmt.len() {
         let d = ut[i].abs();
         raised |= d > dmt[i];
@@ -687,11 +820,13 @@ fn sample<S: pulp::Simd>(
             kt[i] * (udt[i] - vbelowt[i]),
         );
         let (d_turn, s_turn) = (udpt[i] * udt[i] < 0.0, r0 * r1 < 0.0);
-        tdt[i] = if d_turn { -1.0 } else { 0.0 };
-        tst[i] = if s_turn { -1.0 } else { 0.0 };
-        turns |= d_turn | s_turn;
+        let f = f0 + i;
+        let w = ((d_turn as u64) | (s_turn as u64) << 1) << (2 * (f % TURN_GROUP));
+        let t = &mut turn[f / TURN_GROUP];
+        *t = f64::from_bits(t.to_bits() | w);
+        any_turn |= w;
     }
-    (raised | any(simd, rv), turns | any(simd, tv))
+    (raised | any(simd, rv), any_turn != 0)
 }
 
 /// Whether some lane of the mask is set.
