@@ -149,8 +149,9 @@ pub struct Stepper<'a> {
     pub(super) overlap_lower: Vec<f64>,
     /// Candidates for the continuous peaks, refined at the end ([`peaks::Deferred`]).
     pub(super) deferred: peaks::Deferred,
-    /// Scratch of the observation: the turn flags of one building (−1 or 0 per floor, then
-    /// per story, padded; see `observe::sample`), and the homogeneous amplitudes of every
+    /// Scratch of the observation: the turn bits of one building (words of 64 bits stored as
+    /// f64 bit patterns: floor displacements and story shears interleaved, 32 floors per
+    /// word; see `observe::sample`), and the homogeneous amplitudes of every
     /// mode over the interval (for the Hermite error bounds; building b's modes valid if
     /// `amp_valid[b]`) with their per-mode constants.
     pub(super) flags: Vec<f64>,
@@ -175,8 +176,9 @@ pub struct Stepper<'a> {
     pub(super) overlap_inv: Vec<f64>,
     pub(super) env_r: Vec<f64>,
     pub(super) skip: Vec<bool>,
-    /// 2E_b per building at the start of the interval being observed, when the fast path
-    /// computed it (`env_e2_fresh`) for its contact bound.
+    /// 2E_b per building at the start of the interval being observed: from the fast path's
+    /// contact bound when it computed it (`env_e2_fresh`), else from the observation's
+    /// envelope (`observe::twice_energy`); read only by the envelope.
     pub(super) env_e2: Vec<f64>,
     pub(super) env_e2_fresh: bool,
     /// The overlap pairs as runs of consecutive pairs whose floors both step by one (the
