@@ -470,16 +470,18 @@ impl Stepper<'_> {
     pub(super) fn resolve_deferred(&mut self) {
         let p = self.p;
         let modal = &p.modal;
-        let order = self.deferred.order();
+        let best = |st: &Self, c: &Candidate| match c.target {
+            Target::Displacement { building, floor } => st.disp_max[building][floor],
+            Target::Shear { building, story } => st.shear_max[building][story],
+            Target::Overlap { pair } => st.overlaps.max[pair],
+        };
+        // Only candidates that can beat their peak now are ordered (peaks only grow, so the
+        // others would be skipped below anyway; the survivors keep their relative order).
+        let order = self.deferred.order_where(|c| !(c.upper < best(self, c)));
         for k in order {
             let c = self.deferred.candidates[k];
             let iv = self.deferred.interval(c.interval);
-            let best = match c.target {
-                Target::Displacement { building, floor } => self.disp_max[building][floor],
-                Target::Shear { building, story } => self.shear_max[building][story],
-                Target::Overlap { pair } => self.overlaps.max[pair],
-            };
-            if c.upper < best {
+            if c.upper < best(self, &c) {
                 continue;
             }
             match c.target {

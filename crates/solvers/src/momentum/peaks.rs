@@ -182,9 +182,15 @@ impl Deferred {
     /// Candidates in the order they are to be refined: decreasing upper bound (stable, so
     /// chronological among equal bounds).
     pub fn order(&self) -> Vec<usize> {
+        self.order_where(|_| true)
+    }
+
+    /// [`Deferred::order`] of the candidates that `keep` accepts (the same relative order).
+    pub fn order_where(&self, keep: impl Fn(&Candidate) -> bool) -> Vec<usize> {
         // Sorted by (key descending, index ascending), the key ordered as `f64::total_cmp`
         // orders the bounds: the permutation of the stable sort by decreasing bound.
         let mut o: Vec<(i64, usize)> = (self.candidates.iter().enumerate())
+            .filter(|(_, c)| keep(c))
             .map(|(k, c)| {
                 let bits = c.upper.to_bits() as i64;
                 (!(bits ^ (((bits >> 63) as u64) >> 1) as i64), k)
