@@ -47,7 +47,8 @@ impl Stepper<'_> {
     #[inline(always)]
     fn observe_with<S: pulp::Simd>(&mut self, simd: S) {
         let len = self.interval.tau_done;
-        self.amp_valid.fill(false);
+        // A new sample: every building's amplitudes are stale.
+        self.amp_epoch += 1;
         let mut stored: Option<usize> = None;
         let nb = self.p.modal.buildings.len();
         let skip_overlaps = self.envelope(simd, len);
@@ -354,10 +355,10 @@ impl Stepper<'_> {
                 *c = bm.phi[m * nf + i];
             }
         }
-        if !self.amp_valid[b] {
+        if self.amp_valid[b] != self.amp_epoch {
             let r = bm.range.clone();
             peaks::amplitudes(&p.modal, &self.amp_k, r, &self.interval, &mut self.obs_amp);
-            self.amp_valid[b] = true;
+            self.amp_valid[b] = self.amp_epoch;
         }
         let bound = peaks::hermite_error_bound(&p.modal, first, coef, &self.obs_amp, len);
         if h.abs() + bound < peak {
@@ -443,10 +444,10 @@ impl Stepper<'_> {
         }
         let modal = &self.p.modal;
         for b in [l, r] {
-            if !self.amp_valid[b] {
+            if self.amp_valid[b] != self.amp_epoch {
                 let range = modal.buildings[b].range.clone();
                 peaks::amplitudes(modal, &self.amp_k, range, &self.interval, &mut self.obs_amp);
-                self.amp_valid[b] = true;
+                self.amp_valid[b] = self.amp_epoch;
             }
         }
         let c = &self.overlap_rows[k];

@@ -153,10 +153,13 @@ pub struct Stepper<'a> {
     /// f64 bit patterns: floor displacements and story shears interleaved, 32 floors per
     /// word; see `observe::sample`), and the homogeneous amplitudes of every
     /// mode over the interval (for the Hermite error bounds; building b's modes valid if
-    /// `amp_valid[b]`) with their per-mode constants.
+    /// `amp_valid[b] == amp_epoch`) with their per-mode constants.
     pub(super) flags: Vec<f64>,
     pub(super) obs_amp: Vec<f64>,
-    pub(super) amp_valid: Vec<bool>,
+    pub(super) amp_valid: Vec<u64>,
+    /// The sample count that makes `amp_valid[b]` current (bumped per sample, instead of
+    /// clearing a flag per building).
+    pub(super) amp_epoch: u64,
     pub(super) amp_k: Vec<[f64; 3]>,
     /// Energy envelope of the observation ([`super::observe`]): per building, the inverse
     /// flexibility norms 1/f_y of its floor displacements then story shears (each padded
@@ -422,7 +425,8 @@ impl<'a> Stepper<'a> {
             deferred: peaks::Deferred::new(nm),
             flags: Vec::new(),
             obs_amp: vec![0.0; nm],
-            amp_valid: vec![false; p.modal.buildings.len()],
+            amp_valid: vec![0; p.modal.buildings.len()],
+            amp_epoch: 1,
             amp_k: peaks::amplitude_constants(&p.modal),
             env_inv: Vec::new(),
             env_gamma: p
