@@ -89,15 +89,12 @@ pub struct Stepper<'a> {
     /// Running peaks per building, floor (story) index, zero-padded to
     /// [`super::modal::BuildingModes::padded_floors`] (as `stiffness` and the lower bounds).
     pub(super) disp_max: Vec<Vec<f64>>,
-    /// Per-mode energy sums of the fast path (input, damping), J; folded in by `finish`.
-    pub(super) win_acc: Vec<f64>,
-    pub(super) dmp_acc: Vec<f64>,
-    /// The sums including the step being tried (exchanged with the sums on acceptance).
-    pub(super) win_step: Vec<f64>,
+    /// The works of the accepted fast steps (input, damping) in four lane sums over the modes
+    /// and steps, J, without their a·a terms; folded in by `finish`.
+    pub(super) work_acc: [[f64; 4]; 2],
     /// Σ a₀², Σ a₀a₁, Σ a₁² over the accepted fast steps (the works' a·a terms,
     /// [`super::modal::StepCoeffs::aa_input`]).
     pub(super) aa_acc: [f64; 3],
-    pub(super) dmp_step: Vec<f64>,
     /// g·x of the first contact at the fast step's start, summed as `delta_fast` does.
     pub(super) delta0: f64,
     /// Per mode q̇² + ω² q² at the start of the fast step (the terms of 2E).
@@ -243,8 +240,8 @@ impl ChunkSpan {
     }
 }
 
-/// One chunk of 4 modes `r` of the fast step: the new state into (xn, vn), the energy sums
-/// plus this step's energies into (win, dmp).
+/// One chunk of 4 modes `r` of the fast step: the new state into (xn, vn); returns this
+/// step's works of the four modes (input, damping).
 #[inline(always)]
 #[allow(clippy::type_complexity, clippy::too_many_arguments)]
 fn propagate_chunk(
@@ -252,11 +249,9 @@ fn propagate_chunk(
     r: std::ops::Range<usize>,
     (x, v): (&[f64], &[f64]),
     (xn, vn): (&mut [f64], &mut [f64]),
-    (wacc, dacc): (&[f64], &[f64]),
-    (win, dmp): (&mut [f64], &mut [f64]),
     (a0, a1): (f64, f64),
     (w2, et): (&[f64], &mut [f64]),
-) {
+) -> [[f64; 4]; 2] {
     let (xc, vc, wc): ([f64; 4], [f64; 4], [f64; 4]) = (
         x[r.clone()].try_into().unwrap(),
         v[r.clone()].try_into().unwrap(),
@@ -267,16 +262,8 @@ fn propagate_chunk(
     et[r.clone()].copy_from_slice(&terms);
     let out = super::modal::propagate::<4>(blk, xc, vc, a0, a1);
     xn[r.clone()].copy_from_slice(&out[0]);
-    vn[r.clone()].copy_from_slice(&out[1]);
-    // (All loads before the stores: the buffers are not known to be distinct.)
-    let (wa, da): ([f64; 4], [f64; 4]) = (
-        wacc[r.clone()].try_into().unwrap(),
-        dacc[r.clone()].try_into().unwrap(),
-    );
-    let wsum: [f64; 4] = std::array::from_fn(|i| wa[i] + out[2][i]);
-    let dsum: [f64; 4] = std::array::from_fn(|i| da[i] + out[3][i]);
-    win[r.clone()].copy_from_slice(&wsum);
-    dmp[r].copy_from_slice(&dsum);
+    vn[r].copy_from_slice(&out[1]);
+    [out[2], out[3]]
 }
 
 /// Pairs `k0 .. k0 + n` of the overlap audit: floors `i0 + t` of building `left` against
@@ -334,11 +321,8 @@ impl<'a> Stepper<'a> {
             pen: p.contacts.iter().map(|c| 1e-9 * c.gap.max(1e-3)).collect(),
             xn: vec![0.0; nm],
             vn: vec![0.0; nm],
-            win_acc: vec![0.0; nm],
-            dmp_acc: vec![0.0; nm],
-            win_step: vec![0.0; nm],
+            work_acc: [[0.0; 4]; 2],
             aa_acc: [0.0; 3],
-            dmp_step: vec![0.0; nm],
             delta0: 0.0,
             e_terms: vec![0.0; nm.div_ceil(4) * 4],
             energy_spans: p
@@ -789,6 +773,8 @@ impl<'a> Stepper<'a> {
         let p = self.p;
         let (a0, a1) = (p.ag_start[j], p.ag_end[j]);
         let h = p.full.h;
+        // This step's works (input, damping) in four lane sums over the modes.
+        let mut work = [[0.0f64; 4]; 2];
         {
             // Modes in chunks of 4 (coefficients interleaved per chunk, the tail in a padded
             // chunk): fixed-width arithmetic without bounds checks, which vectorises.
@@ -797,10 +783,6 @@ impl<'a> Stepper<'a> {
             let n4 = nm / 4 * 4;
             let (x, v) = (&self.s.x[..nm], &self.s.v[..nm]);
             let (xn, vn) = (&mut self.xn[..nm], &mut self.vn[..nm]);
-            // The energy sums with this step's energies go to the spare buffers (exchanged
-            // with the sums if the step is accepted).
-            let (win, dmp) = (&mut self.win_step[..nm], &mut self.dmp_step[..nm]);
-            let (wacc, dacc) = (&self.win_acc[..nm], &self.dmp_acc[..nm]);
             let (w2, et) = (&p.omega2[..nm], &mut self.e_terms[..nm]);
             // δ of the first contact at the start as `ContactGeom::delta_fast` sums it (four
             // lane sums over the chunks, the remainder into lane 0), while x passes by (with
@@ -814,16 +796,8 @@ impl<'a> Stepper<'a> {
                     x[r.clone()].try_into().unwrap(),
                 );
                 gacc = std::array::from_fn(|i| gacc[i] + gc[i] * xc[i]);
-                propagate_chunk(
-                    blk,
-                    r,
-                    (x, v),
-                    (xn, vn),
-                    (wacc, dacc),
-                    (win, dmp),
-                    (a0, a1),
-                    (w2, &mut *et),
-                );
+                let e = propagate_chunk(blk, r, (x, v), (xn, vn), (a0, a1), (w2, &mut *et));
+                work = std::array::from_fn(|j| std::array::from_fn(|i| work[j][i] + e[j][i]));
             }
             for k in n4..nm {
                 gacc[0] += g0[k] * x[k];
@@ -832,16 +806,12 @@ impl<'a> Stepper<'a> {
             if let Some(last) = &c.last {
                 // The remainder as the last 4 modes (the first of them again: same values).
                 let r = nm - 4..nm;
-                propagate_chunk(
-                    last,
-                    r,
-                    (x, v),
-                    (xn, vn),
-                    (wacc, dacc),
-                    (win, dmp),
-                    (a0, a1),
-                    (w2, &mut *et),
-                );
+                let e = propagate_chunk(last, r, (x, v), (xn, vn), (a0, a1), (w2, &mut *et));
+                // Only the lanes of the modes past the whole chunks count.
+                let new = |i: usize| nm - 4 + i >= n4;
+                work = std::array::from_fn(|j| {
+                    std::array::from_fn(|i| work[j][i] + if new(i) { e[j][i] } else { 0.0 })
+                });
             } else if let Some(tail) = &c.tail {
                 // Lane by lane (variable-length slice copies would be library calls).
                 let t = nm - n4;
@@ -855,8 +825,8 @@ impl<'a> Stepper<'a> {
                         et[n] = v[n] * v[n] + w2[n] * x[n] * x[n];
                         xn[n4 + i] = out[0][i];
                         vn[n4 + i] = out[1][i];
-                        win[n4 + i] = wacc[n4 + i] + out[2][i];
-                        dmp[n4 + i] = dacc[n4 + i] + out[3][i];
+                        work[0][i] += out[2][i];
+                        work[1][i] += out[3][i];
                     }
                 }
             }
@@ -982,8 +952,8 @@ impl<'a> Stepper<'a> {
         let iv = &mut self.interval;
         (iv.a0, iv.a1, iv.tau, iv.fc) = (a0, a1, h, None);
         // Energy of the accepted step only (a step with a possible event is discarded).
-        std::mem::swap(&mut self.win_acc, &mut self.win_step);
-        std::mem::swap(&mut self.dmp_acc, &mut self.dmp_step);
+        self.work_acc =
+            std::array::from_fn(|j| std::array::from_fn(|i| self.work_acc[j][i] + work[j][i]));
         let aa = &mut self.aa_acc;
         (aa[0], aa[1], aa[2]) = (aa[0] + a0 * a0, aa[1] + a0 * a1, aa[2] + a1 * a1);
         self.finish_grid(j, t_end);
@@ -1182,11 +1152,11 @@ impl<'a> Stepper<'a> {
         // The fast steps' works: per mode, plus the a·a terms of all modes at once.
         let (aa, c) = (self.aa_acc, &self.p.full);
         let dot = |k: &[f64; 3]| k[0] * aa[0] + k[1] * aa[1] + k[2] * aa[2];
-        self.energy.input += self.win_acc.iter().sum::<f64>() + dot(&c.aa_input);
-        self.energy.damping += self.dmp_acc.iter().sum::<f64>() + dot(&c.aa_damping);
+        let lanes = |w: [f64; 4]| (w[0] + w[1]) + (w[2] + w[3]);
+        self.energy.input += lanes(self.work_acc[0]) + dot(&c.aa_input);
+        self.energy.damping += lanes(self.work_acc[1]) + dot(&c.aa_damping);
         self.aa_acc = [0.0; 3];
-        self.win_acc.fill(0.0);
-        self.dmp_acc.fill(0.0);
+        self.work_acc = [[0.0; 4]; 2];
         self.resolve_deferred();
         for &(c, start) in &self.s.persistent {
             self.phases.push(PersistentContact {
