@@ -17,7 +17,10 @@
 //!
 //! Only IEEE additions, multiplications and divisions are used (no fused multiply-add),
 //! so the results are the same bits on every machine and with every instruction set,
-//! unlike a platform's libm. Arguments outside |p| ≤ 700 or |q| ≤ 10⁶ (and NaN) are
+//! unlike a platform's libm. Why not a crate: the arguments live in `pulp` vectors inside
+//! the caller's dispatch, and a single argument must get the bits of a vector lane (the
+//! scalar paths, [`exp_sin_cos1`], run this kernel on `pulp::Scalar`); the vector libm
+//! ports we know (sleef's) need nightly Rust or their own vector types. Arguments outside |p| ≤ 700 or |q| ≤ 10⁶ (and NaN) are
 //! handed to the standard library lane by lane; the momentum method never produces them
 //! for a physical scene (|p| = ζωs, |q| = ω_d s over one record step).
 
