@@ -892,3 +892,116 @@ pub fn load_work(
     let ix = (0.5 * (f0 + f1) * tau - (v1 - v0) - two_zw * (x1 - x0)) / (omega * omega);
     f0 * (x1 - x0) + (f1 - f0) * (x1 - ix / tau)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A deterministic stream in [lo, hi).
+    fn stream(seed: u64) -> impl FnMut(f64, f64) -> f64 {
+        let mut z = seed;
+        move |lo, hi| {
+            z ^= z << 13;
+            z ^= z >> 7;
+            z ^= z << 17;
+            lo + (hi - lo) * ((z >> 11) as f64 / (1u64 << 53) as f64)
+        }
+    }
+
+    /// The vector evaluation of the arcs gives each arc's own values bit for bit.
+    #[test]
+    fn arc_lanes_are_the_arcs_bit_for_bit() {
+        let mut r = stream(0x5eed);
+        for n in [1, 3, 4, 7, 15, 30] {
+            let arcs: Vec<Arc> = (0..n)
+                .map(|_| {
+                    let w = r(0.5, 300.0);
+                    Arc::new(
+                        w,
+                        r(0.0, 0.2),
+                        r(-0.3, 0.3),
+                        r(-2.0, 2.0),
+                        r(-5.0, 5.0),
+                        r(-5.0, 5.0),
+                        r(1e-4, 0.02),
+                    )
+                })
+                .collect();
+            let mut lanes = ArcLanes::default();
+            lanes.set(&arcs);
+            let np = ArcLanes::padded(n);
+            let (mut x, mut v) = (vec![0.0; np], vec![0.0; np]);
+            for s in [0.0, 1e-9, 0.0037, 0.02, 0.3] {
+                assert!(lanes.eval(s, &mut x, &mut v, true, true));
+                for (i, a) in arcs.iter().enumerate() {
+                    let t = a.trig(s);
+                    assert_eq!(x[i].to_bits(), a.x_from(s, t).to_bits(), "x, n {n}, s {s}");
+                    assert_eq!(v[i].to_bits(), a.v_from(t).to_bits(), "v, n {n}, s {s}");
+                }
+            }
+            // Out of the vector range: the caller is told to evaluate arc by arc.
+            assert!(!lanes.eval(1e12, &mut x, &mut v, true, true));
+        }
+    }
+
+    /// The fast step's folded works (per mode, plus the a·a terms of all modes) equal the
+    /// step's works as the previous fast step formed them: the load work ([`load_work`]) on
+    /// the propagator's end state and the damping work as the quadratic form `dq` in
+    /// (q₀, q̇₀, f₀, f₁).
+    #[test]
+    fn folded_works_are_the_step_works() {
+        let mut r = stream(42);
+        let omega: Vec<f64> = (0..6).map(|k| 2.0 + 40.0 * k as f64).collect();
+        let zeta = vec![0.05, 0.02, 0.1, 0.05, 0.0, 0.07];
+        let gamma: Vec<f64> = (0..6).map(|_| r(-2e3, 2e3)).collect();
+        let modal = Modal {
+            omega: omega.clone(),
+            zeta: zeta.clone(),
+            gamma: gamma.clone(),
+            buildings: vec![],
+        };
+        let h = 0.005;
+        let c = StepCoeffs::new(&modal, h);
+        for _ in 0..50 {
+            let (a0, a1) = (r(-5.0, 5.0), r(-5.0, 5.0));
+            let x: Vec<f64> = (0..6).map(|_| r(-1e-2, 1e-2)).collect();
+            let v: Vec<f64> = (0..6).map(|_| r(-0.3, 0.3)).collect();
+            let (mut w_fold, mut d_fold) = (0.0, 0.0);
+            let (mut w_ref, mut d_ref, mut scale) = (0.0, 0.0, 0.0);
+            for n in 0..6 {
+                let blk = StepBlock::<4>::gather(&c, &gamma, n, 1);
+                let (xs, vs) = ([x[n], 0.0, 0.0, 0.0], [v[n], 0.0, 0.0, 0.0]);
+                let out = propagate::<4>(&blk, xs, vs, a0, a1);
+                w_fold += out[2][0];
+                d_fold += out[3][0];
+                let (f0, f1) = (-gamma[n] * a0, -gamma[n] * a1);
+                let (x1, v1) = (out[0][0], out[1][0]);
+                let two_zw = 2.0 * zeta[n] * omega[n];
+                let w = load_work(omega[n], two_zw, f0, f1, h, x[n], v[n], x1, v1);
+                let z = [x[n], v[n], f0, f1];
+                let mut d = 0.0;
+                let mut k = 0;
+                for i in 0..4 {
+                    for j in i..4 {
+                        d += c.dq[k][n] * z[i] * z[j];
+                        k += 1;
+                    }
+                }
+                w_ref += w;
+                d_ref += d;
+                scale += w.abs() + d.abs();
+                scale += (f0.abs() + f1.abs()) * (x[n].abs() + v[n].abs() * h);
+            }
+            let dot = |k: &[f64; 3]| k[0] * a0 * a0 + k[1] * a0 * a1 + k[2] * a1 * a1;
+            w_fold += dot(&c.aa_input);
+            d_fold += dot(&c.aa_damping);
+            // Both forms take ∫q from the equation of motion, (½(f₀+f₁)h − Δq̇ − 2ζωΔq)/ω²,
+            // whose difference cancels all but a fraction (ωh)² of its digits: round-off of
+            // ε/(ωh)² relative to the size of the terms, at the lowest mode (ωh = 0.01).
+            let wh = omega[0] * h;
+            let tol = 32.0 * f64::EPSILON * (1.0 + 1.0 / (wh * wh)) * scale;
+            assert!((w_fold - w_ref).abs() <= tol, "{w_fold} {w_ref} {tol}");
+            assert!((d_fold - d_ref).abs() <= tol, "{d_fold} {d_ref} {tol}");
+        }
+    }
+}
