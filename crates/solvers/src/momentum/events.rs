@@ -88,47 +88,41 @@ pub struct Locator<'a> {
 }
 
 impl Locator<'_> {
-    fn delta(&mut self, s: f64) -> f64 {
+    /// g·q(s) (or g·q̇(s) with `velocity`) over the arcs: in vectors ([`ArcLanes`]) where s
+    /// is in their range, else arc by arc through the memo; the terms summed in mode order
+    /// either way (the same bits).
+    fn g_dot(&mut self, s: f64, velocity: bool) -> f64 {
         let np = ArcLanes::padded(self.arcs.len());
         let (xb, vb) = self.buf.split_at_mut(np);
-        if self.lanes.eval(s, xb, vb, true, false) {
-            // The arcs' values in vectors, summed in mode order (the same bits).
-            let mut d = 0.0;
-            for (g, x) in self.contact.g.iter().zip(xb.iter()) {
-                if *g != 0.0 {
-                    d += g * x;
-                }
-            }
-            return d - self.contact.gap - self.shift;
-        }
+        let g = &self.contact.g;
         let mut d = 0.0;
-        for (n, (g, a)) in self.contact.g.iter().zip(self.arcs).enumerate() {
-            if *g != 0.0 {
-                d += g * a.x_from(s, TrigMemo::get(self.arcs, self.memo, n, s));
-            }
-        }
-        d - self.contact.gap - self.shift
-    }
-
-    fn ddelta(&mut self, s: f64) -> f64 {
-        let np = ArcLanes::padded(self.arcs.len());
-        let (xb, vb) = self.buf.split_at_mut(np);
-        if self.lanes.eval(s, xb, vb, false, true) {
-            let mut d = 0.0;
-            for (g, v) in self.contact.g.iter().zip(vb.iter()) {
+        if self.lanes.eval(s, xb, vb, !velocity, velocity) {
+            for (g, y) in g.iter().zip(if velocity { &*vb } else { &*xb }) {
                 if *g != 0.0 {
-                    d += g * v;
+                    d += g * y;
                 }
             }
             return d;
         }
-        let mut d = 0.0;
-        for (n, (g, a)) in self.contact.g.iter().zip(self.arcs).enumerate() {
+        for (n, (g, a)) in g.iter().zip(self.arcs).enumerate() {
             if *g != 0.0 {
-                d += g * a.v_from(TrigMemo::get(self.arcs, self.memo, n, s));
+                let t = TrigMemo::get(self.arcs, self.memo, n, s);
+                d += g * if velocity {
+                    a.v_from(t)
+                } else {
+                    a.x_from(s, t)
+                };
             }
         }
         d
+    }
+
+    fn delta(&mut self, s: f64) -> f64 {
+        self.g_dot(s, false) - self.contact.gap - self.shift
+    }
+
+    fn ddelta(&mut self, s: f64) -> f64 {
+        self.g_dot(s, true)
     }
 
     fn brent(&mut self, a: f64, b: f64, derivative: bool) -> f64 {
