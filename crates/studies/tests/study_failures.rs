@@ -128,7 +128,7 @@ fn studies_report_the_contact_story() {
     assert!(
         summary.contains(&cell)
             || std::fs::read_to_string(out.join("gap/separation.md"))
-                .map_or(false, |t| t.contains(&cell)),
+                .is_ok_and(|t| t.contains(&cell)),
         "Δ1 = {cell} in the separation table"
     );
 }

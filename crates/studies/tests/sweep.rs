@@ -68,7 +68,7 @@ fn shards_merged_equal_a_single_run() {
     assert!(!r1.reported && r1.summary.ran > 0 && r2.summary.ran > 0);
     assert_eq!(r1.summary.ran + r2.summary.ran, r1.summary.total);
     // One shard alone is incomplete: merge names the missing cases.
-    let err = merge(&[s1.clone()], &tmp("partial"), &studies_dir()).unwrap_err();
+    let err = merge(std::slice::from_ref(&s1), &tmp("partial"), &studies_dir()).unwrap_err();
     assert!(err.to_string().contains("missing ids"), "{err}");
     merge(&[s1, s2], &merged, &studies_dir()).unwrap();
     let (a, b) = (outputs(&single.join("gap")), outputs(&merged.join("gap")));

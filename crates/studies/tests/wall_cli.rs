@@ -226,7 +226,7 @@ fn opensees_agrees_with_pound_newmark_at_a_wall() {
     }
     eprintln!("wall: worst relative difference {worst:.3e}");
     assert!(
-        b["impacts"].as_array().unwrap().len() > 0,
+        !b["impacts"].as_array().unwrap().is_empty(),
         "the floor strikes the wall"
     );
     assert_eq!(

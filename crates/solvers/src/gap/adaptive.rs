@@ -1065,7 +1065,7 @@ fn earliest_event(
         }
         if let Some((a, b)) = bracket {
             let th = locate(g_at, a, b, calls);
-            if event.map_or(true, |(te, _)| th < te) {
+            if event.is_none_or(|(te, _)| th < te) {
                 event = Some((th, ci));
             }
         }

@@ -94,46 +94,6 @@ pub fn contact_forces(
     })
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The series agrees with the closed form where the latter is accurate (ωτ ≥ 0.3, at
-    /// most a factor 1/(ωτ)² ≈ 11 of cancellation), matches the first three Taylor terms
-    /// for tiny τ (where the closed form returns 0), and is exact for the undamped mode.
-    #[test]
-    fn unit_load_displacement_is_accurate_for_short_and_long_segments() {
-        let (w, z) = (20.0, 0.05);
-        for wt in [0.3, 0.4, 0.5, 1.0, 3.0] {
-            let tau = wt / w;
-            let closed = Arc::new(w, z, 0.0, 0.0, 1.0, 1.0, tau).xv(tau).0;
-            let series = unit_load_series(w, z, tau);
-            assert!(
-                (series - closed).abs() <= 1e-13 * closed,
-                "ωτ = {wt}: {series} vs {closed}"
-            );
-        }
-        for tau in [1e-17, 1e-10, 1e-6] {
-            let x = unit_load_displacement(w, z, tau);
-            let wt = w * tau;
-            // τ²/2 − ζωτ³/3 + (4ζ² − 1)ω²τ⁴/24; the next term is O((ωτ)³) relative.
-            let taylor =
-                0.5 * tau * tau * (1.0 - 2.0 * z * wt / 3.0 + (4.0 * z * z - 1.0) * wt * wt / 12.0);
-            assert!(
-                x > 0.0 && (x - taylor).abs() <= (wt.powi(3) + 1e-15) * taylor,
-                "{tau}: {x} vs {taylor}"
-            );
-        }
-        // Undamped, ωτ = 0.5: (1 − cos ωτ)/ω² = 2 sin²(ωτ/2)/ω².
-        let x = unit_load_displacement(w, 0.0, 0.5 / w);
-        let exact = 2.0 * (0.25f64).sin().powi(2) / (w * w);
-        assert!(
-            (x - exact).abs() <= 4.0 * f64::EPSILON * exact,
-            "{x} vs {exact}"
-        );
-    }
-}
-
 impl Stepper<'_> {
     /// Instantaneous holding forces λ = W⁻¹ δ̈_free (N per unit modal mass, > 0 compressive)
     /// of the contacts `set` in the state (x, v) under ground acceleration `a_g`, and for
@@ -310,5 +270,45 @@ impl Stepper<'_> {
             (Step::Reached, Some(c)) => Ok(self.release(c)),
             (step, _) => Ok(step),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The series agrees with the closed form where the latter is accurate (ωτ ≥ 0.3, at
+    /// most a factor 1/(ωτ)² ≈ 11 of cancellation), matches the first three Taylor terms
+    /// for tiny τ (where the closed form returns 0), and is exact for the undamped mode.
+    #[test]
+    fn unit_load_displacement_is_accurate_for_short_and_long_segments() {
+        let (w, z) = (20.0, 0.05);
+        for wt in [0.3, 0.4, 0.5, 1.0, 3.0] {
+            let tau = wt / w;
+            let closed = Arc::new(w, z, 0.0, 0.0, 1.0, 1.0, tau).xv(tau).0;
+            let series = unit_load_series(w, z, tau);
+            assert!(
+                (series - closed).abs() <= 1e-13 * closed,
+                "ωτ = {wt}: {series} vs {closed}"
+            );
+        }
+        for tau in [1e-17, 1e-10, 1e-6] {
+            let x = unit_load_displacement(w, z, tau);
+            let wt = w * tau;
+            // τ²/2 − ζωτ³/3 + (4ζ² − 1)ω²τ⁴/24; the next term is O((ωτ)³) relative.
+            let taylor =
+                0.5 * tau * tau * (1.0 - 2.0 * z * wt / 3.0 + (4.0 * z * z - 1.0) * wt * wt / 12.0);
+            assert!(
+                x > 0.0 && (x - taylor).abs() <= (wt.powi(3) + 1e-15) * taylor,
+                "{tau}: {x} vs {taylor}"
+            );
+        }
+        // Undamped, ωτ = 0.5: (1 − cos ωτ)/ω² = 2 sin²(ωτ/2)/ω².
+        let x = unit_load_displacement(w, 0.0, 0.5 / w);
+        let exact = 2.0 * (0.25f64).sin().powi(2) / (w * w);
+        assert!(
+            (x - exact).abs() <= 4.0 * f64::EPSILON * exact,
+            "{x} vs {exact}"
+        );
     }
 }

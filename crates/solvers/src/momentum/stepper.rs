@@ -608,7 +608,7 @@ impl<'a> Stepper<'a> {
             self.stats.max_step = self.stats.max_step.max(tau);
         }
         // Checked every 64 segments (and at the end): a non-finite mode stays non-finite.
-        if self.stats.steps > self.p.limits.max_steps || self.stats.steps % 64 == 0 {
+        if self.stats.steps > self.p.limits.max_steps || self.stats.steps.is_multiple_of(64) {
             return self.count_step_checks();
         }
         Ok(())
@@ -625,7 +625,7 @@ impl<'a> Stepper<'a> {
                 limit: self.p.limits.max_steps,
             });
         }
-        if self.stats.steps % 64 == 0 && !self.state_is_finite() {
+        if self.stats.steps.is_multiple_of(64) && !self.state_is_finite() {
             return Err(SolverError::NonFinite {
                 time: self.s.t,
                 context: "modal state after a propagation segment".into(),

@@ -347,9 +347,7 @@ impl Study for Stiffness {
                 s_imp.push((k, imp));
                 // Work over every record (pounding or not): the integrator's cost.
                 let all = |fun: &dyn Fn(&crate::sweep::CaseOutputs) -> f64| {
-                    Spread::of(
-                        (0..g.records.len()).filter_map(|i| res.out(&gap_of(i, k)).map(|o| fun(o))),
-                    )
+                    Spread::of((0..g.records.len()).filter_map(|i| res.out(&gap_of(i, k)).map(fun)))
                 };
                 s_rhs.push((k, all(&|o| o.rhs_evaluations as f64)));
                 s_steps.push((k, all(&|o| o.steps as f64)));
