@@ -125,7 +125,8 @@ enum StudiesCommand {
     /// every n-th case runs and only case files are written; `pound studies merge` then
     /// checks coverage and writes the tables and figures.
     Run {
-        /// Studies to run: paper, stiffness, modes, restitution, gap, cost, stability.
+        /// Studies to run: paper, stiffness, modes, restitution, gap, cost, stability,
+        /// modelform, yielding (what --all runs); robustness and yielding-strong by name only.
         names: Vec<String>,
         /// Run every study.
         #[arg(long)]
@@ -136,8 +137,11 @@ enum StudiesCommand {
         /// Folder holding the study definitions (<name>.toml) and the scenes they name.
         #[arg(long, default_value = "studies")]
         studies_dir: PathBuf,
-        /// Run studies 2-5 (stiffness, modes, restitution, gap) on these records instead of
-        /// the four Loma Prieta components (PEER AT2, or two-column time/acceleration in g).
+        /// Run the record-based studies (stiffness, modes, restitution, gap, modelform,
+        /// yielding, yielding-strong, robustness) on these records instead of their
+        /// definitions' (PEER AT2, or two-column time/acceleration in g). Naming a study with
+        /// one fixed scene (paper, cost, stability) with --records is an error; with --all
+        /// those run their own record.
         #[arg(long, num_args = 1..)]
         records: Vec<PathBuf>,
         /// Run one part of the sweep: cases with index % n == i - 1.
@@ -472,6 +476,32 @@ fn studies_command(command: StudiesCommand) -> Result<()> {
                 Some(s) => Some(s.parse::<studies::sweep::Shard>().map_err(input)?),
                 None => studies::sweep::Shard::from_slurm(),
             };
+            if !records.is_empty() && !all {
+                let fixed: Vec<&str> = names
+                    .iter()
+                    .map(String::as_str)
+                    .filter(|n| !st::TAKE_RECORDS.contains(n))
+                    .collect();
+                if !fixed.is_empty() {
+                    return Err(input(format!(
+                        "--records: {} {} one fixed scene and record, not yours; --records applies to {}",
+                        fixed.iter().map(|n| format!("`{n}`")).collect::<Vec<_>>().join(", "),
+                        if fixed.len() == 1 { "runs" } else { "run" },
+                        st::TAKE_RECORDS.join(", ")
+                    )));
+                }
+            }
+            if !records.is_empty() && all {
+                let fixed: Vec<&str> = st::NAMES
+                    .iter()
+                    .copied()
+                    .filter(|n| !st::TAKE_RECORDS.contains(n))
+                    .collect();
+                eprintln!(
+                    "--records: {} run their own scene and record",
+                    fixed.join(", ")
+                );
+            }
             let mut recs = Vec::new();
             for r in &records {
                 if !r.is_file() {

@@ -900,6 +900,33 @@ fn threads_beyond_the_limit_are_refused() {
     );
 }
 
+/// `--records` with a study that runs one fixed scene and record (the paper's example, the
+/// cost and stability scenes) is refused, naming the study and those that take records,
+/// before anything is written; the record-based study named beside it does not run either.
+#[test]
+fn records_for_a_fixed_record_study_are_refused() {
+    let d = TempDir::new("fixedrecords");
+    let out = d.path("results");
+    let rec = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../data/ground-motions/RSN752_LOMAP_CAP000.AT2"
+    );
+    for (names, expect) in [
+        (&["paper"][..], "`paper` runs"),
+        (&["gap", "cost", "stability"][..], "`cost`, `stability` run"),
+    ] {
+        let mut a: Vec<String> = vec!["studies".into(), "run".into()];
+        a.extend(names.iter().map(|n| n.to_string()));
+        a.extend(["--records".into(), rec.into(), "--quick".into()]);
+        a.extend(["--out".into(), s(&out)]);
+        assert_bad(
+            &a,
+            &["--records", expect, "applies to stiffness", "robustness"],
+            &[&out],
+        );
+    }
+}
+
 #[test]
 fn scene_solver_options_out_of_range() {
     let base = base_scene();

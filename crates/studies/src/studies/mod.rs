@@ -40,6 +40,20 @@ use crate::table::Table;
 /// (`studies/yielding-strong.toml`).
 pub const EXTRA: [&str; 2] = ["robustness", "yielding-strong"];
 
+/// The studies that run on the records given with `--records` (instead of their
+/// definition's); the others (`paper`, `cost`, `stability`) reproduce or measure one fixed
+/// scene and refuse `--records` when named (the CLI's exit 2).
+pub const TAKE_RECORDS: [&str; 8] = [
+    "stiffness",
+    "modes",
+    "restitution",
+    "gap",
+    "modelform",
+    "yielding",
+    "yielding-strong",
+    "robustness",
+];
+
 /// All studies, in the order `--all` runs them.
 pub const NAMES: [&str; 9] = [
     "paper",
@@ -743,4 +757,48 @@ pub fn record_classes(
         e => e.into(),
     })?;
     Ok(recs.iter().map(|r| t.class(r)).collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `TAKE_RECORDS` (what the CLI accepts `--records` for) is what the studies do: a study
+    /// in the list builds its cases on the given record only, one outside it never uses it.
+    #[test]
+    fn the_studies_that_take_records_are_those_listed() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+        let rec = root
+            .join("data/ground-motions/RSN767_LOMAP_G03090.AT2")
+            .display()
+            .to_string();
+        let opts = StudyOptions {
+            quick: true,
+            records: vec![rec.clone()],
+        };
+        let cfg = RunConfig {
+            out: std::env::temp_dir().join("pound-take-records"),
+            studies_dir: root.join("studies"),
+            threads: None,
+            shard: None,
+            opts: opts.clone(),
+            progress: false,
+            fresh: false,
+        };
+        for name in NAMES.iter().chain(EXTRA.iter()) {
+            let (text, file) = read_definition(&cfg, name).unwrap();
+            let ctx = make_ctx(name, &text, &file, &cfg, &opts).unwrap();
+            let cases = study(name).unwrap().cases(&ctx).unwrap();
+            assert!(!cases.is_empty(), "{name}");
+            let mine = cases
+                .iter()
+                .filter(|c| c.record.as_deref() == Some(rec.as_str()))
+                .count();
+            if TAKE_RECORDS.contains(name) {
+                assert_eq!(mine, cases.len(), "{name}: every case on the given record");
+            } else {
+                assert_eq!(mine, 0, "{name}: its own record");
+            }
+        }
+    }
 }
