@@ -150,6 +150,38 @@ fn failing_cases_become_rows() {
     assert!(csv.contains("Stalled"));
 }
 
+/// Timed cases (`repeat` > 1) run alone, after the others, in case order; the others run in
+/// parallel. A mixed list runs to completion with every case written, timed ones included.
+#[test]
+fn timed_cases_run_alone_after_the_others() {
+    let base = CaseSpec::new("paper/scene.toml", solvers::Method::Momentum)
+        .with("analysis.duration", "2.0");
+    let t1 = base.clone().with("contacts.0.gap", "0.05").repeat(3);
+    let u1 = base.clone().with("contacts.0.gap", "0.06");
+    let t2 = base.clone().with("contacts.0.gap", "0.07").repeat(2);
+    let u2 = base.clone().with("contacts.0.gap", "0.08");
+    let specs = vec![t1.clone(), u1.clone(), t2.clone(), u2.clone()];
+    let refs: Vec<&CaseSpec> = specs.iter().collect();
+    let (parallel, alone) = studies::sweep::schedule(&refs);
+    let ids = |v: &[&CaseSpec]| v.iter().map(|s| s.id.clone()).collect::<Vec<_>>();
+    assert_eq!(ids(&parallel), vec![u1.id.clone(), u2.id.clone()]);
+    assert_eq!(ids(&alone), vec![t1.id.clone(), t2.id.clone()]);
+    let out = tmp("timed");
+    let opts = EngineOptions {
+        study_dir: out.clone(),
+        studies_dir: studies_dir(),
+        threads: Some(2),
+        shard: None,
+        progress: false,
+        fresh: true,
+    };
+    let s = run_cases(&specs, &opts).unwrap();
+    assert_eq!((s.ran, s.failed), (4, 0));
+    let res = studies::sweep::collect("t", &specs, &out).unwrap();
+    assert_eq!(res.get(&t1).wall_seconds_all.len(), 3);
+    assert_eq!(res.get(&u1).wall_seconds_all.len(), 1);
+}
+
 #[test]
 fn case_ids_are_stable() {
     let a = CaseSpec::new("paper/scene.toml", solvers::Method::Gap)
