@@ -1202,10 +1202,10 @@ fn validate(raw: RawScene, origin: &str, base_dir: &Path) -> Result<Scene, Scene
                 }
             }
             if let Some(s) = g.scale {
-                if !s.is_finite() {
+                if !(s.is_finite() && s != 0.0) {
                     return Err(invalid(
                         key("scale"),
-                        format!("{s}: expected a finite factor"),
+                        format!("{s}: expected a finite, nonzero factor (a zero factor leaves no ground motion)"),
                     ));
                 }
             }

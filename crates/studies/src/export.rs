@@ -114,6 +114,14 @@ fn pystr(s: &str) -> String {
 /// Things the export reproduces only approximately; the CLI prints them as warnings.
 pub fn opensees_caveats(scene: &Scene) -> Vec<String> {
     let mut w = Vec::new();
+    if scene.gap_element.integrator != structure::scene::Integrator::Newmark {
+        w.push(format!(
+            "the script integrates with Newmark (average acceleration) at gap_element.time_step = \
+             {} s; this scene's gap element is adaptive (tolerance {:e}), so compare with \
+             `pound run --method gap --set gap_element.integrator=newmark`",
+            scene.gap_element.time_step, scene.gap_element.tolerance
+        ));
+    }
     if !scene.contacts.is_empty()
         && scene.gap_element.law == ContactLaw::KelvinVoigt
         && !scene.gap_element.tension

@@ -58,6 +58,64 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
     result.map_err(err)
 }
 
+/// Writes several files all or nothing: every file goes to a temporary file in its folder
+/// first; only when all are written are they renamed into place. If any cannot be written,
+/// the temporary files are removed and every destination is left as it was (an existing
+/// file is neither replaced nor deleted).
+pub fn write_all_atomic(files: &[(&Path, &[u8])]) -> Result<(), OutputError> {
+    let mut staged: Vec<(PathBuf, &Path)> = Vec::new();
+    let cleanup = |staged: &[(PathBuf, &Path)]| {
+        for (tmp, _) in staged {
+            let _ = std::fs::remove_file(tmp);
+        }
+    };
+    for (k, (path, bytes)) in files.iter().enumerate() {
+        let err = |error| OutputError::Io {
+            path: path.display().to_string(),
+            error,
+        };
+        let dir = match path.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        let ro = std::fs::metadata(path).is_ok_and(|m| m.permissions().readonly());
+        let name = path
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let tmp = dir.join(format!(".{name}.tmp-{}-{k}", std::process::id()));
+        let result = if ro {
+            Err(std::io::Error::new(
+                std::io::ErrorKind::PermissionDenied,
+                "the file exists and is read-only; it is not replaced",
+            ))
+        } else {
+            (|| {
+                std::fs::create_dir_all(&dir)?;
+                let mut f = std::fs::File::create(&tmp)?;
+                f.write_all(bytes)?;
+                f.sync_all()
+            })()
+        };
+        if let Err(e) = result {
+            let _ = std::fs::remove_file(&tmp);
+            cleanup(&staged);
+            return Err(err(e));
+        }
+        staged.push((tmp, path));
+    }
+    for (i, (tmp, path)) in staged.iter().enumerate() {
+        if let Err(e) = std::fs::rename(tmp, path) {
+            cleanup(&staged[i..]);
+            return Err(OutputError::Io {
+                path: path.display().to_string(),
+                error: e,
+            });
+        }
+    }
+    Ok(())
+}
+
 /// Serialises `value` as pretty JSON and writes it atomically.
 pub fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<(), OutputError> {
     let mut s = serde_json::to_string_pretty(value).map_err(|source| OutputError::Json {

@@ -212,6 +212,52 @@ const MAX_THREADS: usize = 1024;
 #[error("{0}")]
 struct InputError(String);
 
+/// Whether two output paths name the same file (the same path, or the same existing file).
+fn same_file(a: &std::path::Path, b: &std::path::Path) -> bool {
+    // The folder resolved (links, `..`), the file name as given: the file need not exist.
+    let abs = |p: &std::path::Path| {
+        let dir = match p.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d,
+            _ => std::path::Path::new("."),
+        };
+        match (std::fs::canonicalize(dir), p.file_name()) {
+            (Ok(d), Some(n)) => d.join(n),
+            _ => p.to_path_buf(),
+        }
+    };
+    a == b || abs(a) == abs(b)
+}
+
+/// Scene settings the gap element takes but does not use with the scene's contact law: said
+/// on stderr, so a comparison of methods at c_r < 1 does not silently compare elastic
+/// springs with inelastic impacts.
+fn gap_law_notes(scene: &structure::Scene) -> Vec<String> {
+    use structure::scene::ContactLaw;
+    let g = &scene.gap_element;
+    let mut notes = Vec::new();
+    if g.law == ContactLaw::Linear {
+        for (i, c) in scene.contacts.iter().enumerate() {
+            if c.restitution != 1.0 {
+                notes.push(format!(
+                    "contacts.{i}.restitution = {} is not used by the linear gap element (an elastic spring, no dashpot: c_r = 1); set gap_element.law = \"kelvin-voigt\" or \"hertz-damp\" for a damped impact",
+                    c.restitution
+                ));
+            }
+        }
+    }
+    if g.tension && g.law != ContactLaw::KelvinVoigt {
+        notes.push(format!(
+            "gap_element.tension = true applies to the kelvin-voigt law only; the {} law ignores it",
+            match g.law {
+                ContactLaw::Linear => "linear",
+                ContactLaw::HertzDamp => "hertz-damp",
+                ContactLaw::KelvinVoigt => "kelvin-voigt",
+            }
+        ));
+    }
+    notes
+}
+
 fn input<E: std::fmt::Display>(e: E) -> anyhow::Error {
     anyhow::Error::new(InputError(e.to_string()))
 }
@@ -324,6 +370,12 @@ fn run(cli: Cli) -> Result<()> {
                         "--pga {p}: expected a peak ground acceleration > 0 (g)"
                     )));
                 }
+                if gm.pga() == 0.0 {
+                    return Err(input(format!(
+                        "--pga {p}: {} is all zeros: it cannot be scaled to a PGA",
+                        record.record.display()
+                    )));
+                }
                 gm = gm.scaled_to_pga(p);
             }
             let periods = periods.unwrap_or_else(default_periods);
@@ -353,12 +405,25 @@ fn run(cli: Cli) -> Result<()> {
             history,
             no_baseline,
         } => {
+            if let (Some(o), Some(h)) = (&out, &history) {
+                if same_file(o, h) {
+                    return Err(input(format!(
+                        "--out and --history are the same file ({}): give two paths",
+                        o.display()
+                    )));
+                }
+            }
             let scene = load_scene(&path, &set)?;
             let method = match method {
                 MethodArg::Momentum => Method::Momentum,
                 MethodArg::Gap => Method::Gap,
                 MethodArg::Impulse => Method::Impulse,
             };
+            if method == Method::Gap {
+                for w in gap_law_notes(&scene) {
+                    eprintln!("note: {w}");
+                }
+            }
             if let (Method::Momentum, Some(n)) = (method, scene.momentum.modes) {
                 for b in scene.buildings.iter().filter(|b| b.n_floors() < n) {
                     eprintln!(
@@ -390,24 +455,28 @@ fn run(cli: Cli) -> Result<()> {
             for w in report::overlap_warnings(&result) {
                 eprintln!("warning: {w}");
             }
+            // All or nothing: the history and the result are written together or not at all
+            // (a file that was there before is left as it was).
+            let mut files: Vec<(PathBuf, Vec<u8>)> = Vec::new();
             if let (Some(p), Some(h)) = (&history, &hist) {
-                io::write_atomic(p, io::history_csv(&scene, h)?.as_bytes())?;
+                files.push((p.clone(), io::history_csv(&scene, h)?.into_bytes()));
             }
-            match out {
-                Some(p) => {
-                    let doc = report::run_json(&scene, &set, &result, amplification.as_deref());
-                    // All or nothing: without the result, the history is not left behind.
-                    if let Err(e) = io::write_json(&p, &doc) {
-                        if let Some(h) = &history {
-                            let _ = std::fs::remove_file(h);
-                        }
-                        return Err(e.into());
-                    }
-                }
-                None => print!(
+            if let Some(p) = &out {
+                let doc = report::run_json(&scene, &set, &result, amplification.as_deref());
+                let mut s = serde_json::to_string_pretty(&doc)?;
+                s.push('\n');
+                files.push((p.clone(), s.into_bytes()));
+            }
+            let refs: Vec<(&std::path::Path, &[u8])> = files
+                .iter()
+                .map(|(p, b)| (p.as_path(), b.as_slice()))
+                .collect();
+            io::write_all_atomic(&refs)?;
+            if out.is_none() {
+                print!(
                     "{}",
                     report::run_summary(&scene, &result, amplification.as_deref())
-                ),
+                );
             }
         }
         Command::Export {
@@ -442,15 +511,15 @@ fn studies_command(command: StudiesCommand) -> Result<()> {
             quick,
             fresh,
         } => {
-            let names: Vec<String> = if all {
-                st::NAMES.iter().map(|s| s.to_string()).collect()
-            } else {
-                names
-            };
-            if names.is_empty() {
+            if names.is_empty() && !all {
                 return Err(input(format!(
-                    "name at least one study or give --all (studies: {})",
-                    st::NAMES.join(", ")
+                    "name at least one study or give --all (studies: {}){}",
+                    st::NAMES.join(", "),
+                    if records.is_empty() {
+                        ""
+                    } else {
+                        "; --records takes every argument after it: name the studies before --records"
+                    }
                 )));
             }
             for n in &names {
@@ -462,6 +531,19 @@ fn studies_command(command: StudiesCommand) -> Result<()> {
                     )));
                 }
             }
+            // --all with names: every study of --all, then the named ones it does not hold
+            // (e.g. `--all robustness`), each once.
+            let names: Vec<String> = if all {
+                let mut v: Vec<String> = st::NAMES.iter().map(|s| s.to_string()).collect();
+                for n in names {
+                    if !v.contains(&n) {
+                        v.push(n);
+                    }
+                }
+                v
+            } else {
+                names
+            };
             if threads == Some(0) {
                 return Err(input("--threads 0: expected at least 1"));
             }
@@ -474,7 +556,7 @@ fn studies_command(command: StudiesCommand) -> Result<()> {
             }
             let shard = match shard {
                 Some(s) => Some(s.parse::<studies::sweep::Shard>().map_err(input)?),
-                None => studies::sweep::Shard::from_slurm(),
+                None => studies::sweep::Shard::from_slurm().map_err(input)?,
             };
             if !records.is_empty() && !all {
                 let fixed: Vec<&str> = names
@@ -504,10 +586,23 @@ fn studies_command(command: StudiesCommand) -> Result<()> {
             }
             let mut recs = Vec::new();
             for r in &records {
+                if r.is_dir() {
+                    return Err(input(format!(
+                        "--records: {} is a folder; give the record files (e.g. {}/*.AT2)",
+                        r.display(),
+                        r.display()
+                    )));
+                }
                 if !r.is_file() {
                     return Err(input(format!("--records: {} does not exist", r.display())));
                 }
                 recs.push(std::path::absolute(r)?.display().to_string());
+            }
+            if !studies_dir.is_dir() {
+                return Err(input(format!(
+                    "--studies-dir {}: not a folder (expected the folder holding the study definitions, <name>.toml)",
+                    studies_dir.display()
+                )));
             }
             let cfg = st::RunConfig {
                 out: out.clone(),
@@ -591,8 +686,26 @@ fn studies_command(command: StudiesCommand) -> Result<()> {
             out,
             studies_dir,
         } => {
+            for d in &dirs {
+                if !d.is_dir() {
+                    return Err(input(format!(
+                        "{}: not a folder (expected the output folder of a `studies run --shard` run)",
+                        d.display()
+                    )));
+                }
+            }
             let out = out.unwrap_or_else(|| dirs[0].clone());
-            let (merged, unexpected) = st::merge(&dirs, &out, &studies_dir)?;
+            // A shard missing, or folders without manifests, is bad input (exit 2); the check
+            // comes before anything is written.
+            let (merged, unexpected) =
+                st::merge(&dirs, &out, &studies_dir).map_err(|e| match e {
+                    studies::sweep::StudyError::Incomplete { .. }
+                    | studies::sweep::StudyError::Definition { .. } => input(e),
+                    studies::sweep::StudyError::Other(m) if m.starts_with("no study manifests") => {
+                        input(m)
+                    }
+                    e => anyhow::Error::new(e),
+                })?;
             eprintln!("merged {} into {}", merged.join(", "), out.display());
             failed_cases(&unexpected)?;
         }

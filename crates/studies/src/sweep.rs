@@ -622,16 +622,66 @@ impl std::str::FromStr for Shard {
 
 impl Shard {
     /// The shard given by a Slurm job array (SLURM_ARRAY_TASK_ID, SLURM_ARRAY_TASK_COUNT,
-    /// and SLURM_ARRAY_TASK_MIN when present: task ids are mapped to 1 … n).
-    pub fn from_slurm() -> Option<Shard> {
-        let id: i64 = std::env::var("SLURM_ARRAY_TASK_ID").ok()?.parse().ok()?;
-        let count: usize = std::env::var("SLURM_ARRAY_TASK_COUNT").ok()?.parse().ok()?;
-        let min: i64 = std::env::var("SLURM_ARRAY_TASK_MIN")
-            .ok()
-            .and_then(|v| v.parse().ok())
-            .unwrap_or(1);
-        let index = (id - min + 1) as usize;
-        (count > 0 && index >= 1 && index <= count).then_some(Shard { index, count })
+    /// and SLURM_ARRAY_TASK_MIN when present: task ids are mapped to 1 … n). None outside a
+    /// job array (no SLURM_ARRAY_TASK_ID); an error when the variables are there but do not
+    /// give a shard (not numbers, an id out of range, or a sparse or stepped array such as
+    /// `--array=1,3,5` or `1-16:2`, whose ids are not 1 … n after the minimum), so a task
+    /// never runs the whole sweep by mistake.
+    pub fn from_slurm() -> std::result::Result<Option<Shard>, String> {
+        Shard::from_env(|k| std::env::var(k).ok())
+    }
+
+    /// [`Shard::from_slurm`] with the environment given as a lookup (for tests).
+    pub fn from_env(
+        get: impl Fn(&str) -> Option<String>,
+    ) -> std::result::Result<Option<Shard>, String> {
+        let Some(id) = get("SLURM_ARRAY_TASK_ID") else {
+            return Ok(None);
+        };
+        let num = |k: &str, v: &str| {
+            v.trim()
+                .parse::<i64>()
+                .map_err(|_| format!("{k} = `{v}`: not a whole number (or give --shard i/n)"))
+        };
+        let id = num("SLURM_ARRAY_TASK_ID", &id)?;
+        let count = match get("SLURM_ARRAY_TASK_COUNT") {
+            Some(c) => num("SLURM_ARRAY_TASK_COUNT", &c)?,
+            None => return Err(
+                "SLURM_ARRAY_TASK_ID is set but SLURM_ARRAY_TASK_COUNT is not: give --shard i/n"
+                    .into(),
+            ),
+        };
+        let min = match get("SLURM_ARRAY_TASK_MIN") {
+            Some(m) => num("SLURM_ARRAY_TASK_MIN", &m)?,
+            None => 1,
+        };
+        if let Some(step) = get("SLURM_ARRAY_TASK_STEP") {
+            let step = num("SLURM_ARRAY_TASK_STEP", &step)?;
+            if step != 1 {
+                return Err(format!(
+                    "a stepped job array (SLURM_ARRAY_TASK_STEP = {step}) does not number its tasks 1 … n: use --array=1-N, or give --shard i/n"
+                ));
+            }
+        }
+        if let Some(max) = get("SLURM_ARRAY_TASK_MAX") {
+            let max = num("SLURM_ARRAY_TASK_MAX", &max)?;
+            if max - min + 1 != count {
+                return Err(format!(
+                    "a sparse job array (ids {min} … {max}, {count} tasks) does not number its tasks 1 … n: use --array={min}-{}, or give --shard i/n",
+                    min + count - 1
+                ));
+            }
+        }
+        let index = id - min + 1;
+        if count < 1 || index < 1 || index > count {
+            return Err(format!(
+                "SLURM_ARRAY_TASK_ID = {id} is outside the array's {count} task(s) from {min}: give --shard i/n"
+            ));
+        }
+        Ok(Some(Shard {
+            index: index as usize,
+            count: count as usize,
+        }))
     }
 
     pub fn takes(&self, case_index: usize) -> bool {

@@ -33,7 +33,11 @@ fn assert_bad(args: &[String], expect: &[&str], outputs: &[&Path]) -> String {
     );
     assert_eq!(out.status.code(), Some(2), "exit code, {what}");
     assert!(!stderr.contains("panicked"), "panic, {what}");
-    assert!(stderr.starts_with("error"), "an error message, {what}");
+    // Notes (settings the method does not use) may come first; an error line must follow.
+    assert!(
+        stderr.lines().any(|l| l.starts_with("error")),
+        "an error message, {what}"
+    );
     for e in expect {
         assert!(stderr.contains(e), "stderr should contain {e:?}, {what}");
     }
@@ -324,6 +328,20 @@ fn record_file_that_does_not_exist() {
     assert_bad(
         &["spectrum".into(), s(&missing), "--out".into(), s(&csv)],
         &["missing.AT2"],
+        &[&csv],
+    );
+    // An all-zero record has no PGA to scale to (as `run` says of a scene's record).
+    let zeros = d.write("zeros.txt", "0 0\n0.01 0\n0.02 0\n");
+    assert_bad(
+        &[
+            "spectrum".into(),
+            s(&zeros),
+            "--pga".into(),
+            "0.4".into(),
+            "--out".into(),
+            s(&csv),
+        ],
+        &["zeros.txt", "all zeros", "--pga 0.4"],
         &[&csv],
     );
 }
@@ -760,6 +778,11 @@ fn scene_ground_motion_scaling() {
         &["ground_motion.scale", "finite"],
     );
     scene_case(
+        &edit(&base, "pga = 0.3", "scale = 0.0"),
+        &[],
+        &["ground_motion.scale", "nonzero"],
+    );
+    scene_case(
         &edit(&base, "pga = 0.3", "units = \"furlongs\""),
         &[],
         &["ground_motion.units", "furlongs"],
@@ -898,6 +921,140 @@ fn threads_beyond_the_limit_are_refused() {
         &["--threads 100000", "at most 1024"],
         &[&out],
     );
+}
+
+/// `studies run` / `studies merge` arguments that cannot be used: exit 2 before anything is
+/// written (a typo next to --all, a missing studies folder, a folder given as a record,
+/// study names swallowed by --records, merge folders that are missing, hold no manifests, or
+/// lack a shard's cases).
+#[test]
+fn studies_arguments_that_cannot_be_used_are_refused() {
+    let d = TempDir::new("studyargs");
+    let out = d.path("results");
+    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");
+    let studies = format!("{root}/studies");
+    let rec = format!("{root}/data/ground-motions/RSN752_LOMAP_CAP000.AT2");
+    let recdir = format!("{root}/data/ground-motions");
+    let o = s(&out);
+    let cases: Vec<(Vec<&str>, Vec<&str>)> = vec![
+        (
+            vec![
+                "studies",
+                "run",
+                "--all",
+                "papr",
+                "--studies-dir",
+                &studies,
+                "--out",
+                &o,
+            ],
+            vec!["unknown study `papr`"],
+        ),
+        (
+            vec![
+                "studies",
+                "run",
+                "paper",
+                "--studies-dir",
+                "/nonexistent/studies",
+                "--out",
+                &o,
+            ],
+            vec!["--studies-dir /nonexistent/studies", "not a folder"],
+        ),
+        (
+            vec![
+                "studies",
+                "run",
+                "gap",
+                "--studies-dir",
+                &studies,
+                "--records",
+                &recdir,
+                "--out",
+                &o,
+            ],
+            vec!["is a folder", "*.AT2"],
+        ),
+        (
+            vec![
+                "studies",
+                "run",
+                "--studies-dir",
+                &studies,
+                "--out",
+                &o,
+                "--records",
+                &rec,
+                "gap",
+            ],
+            vec!["name the studies before --records"],
+        ),
+        (
+            vec!["studies", "merge", "/nonexistent/shard", "--out", &o],
+            vec!["/nonexistent/shard", "not a folder"],
+        ),
+    ];
+    for (args, expect) in cases {
+        let a: Vec<String> = args.iter().map(|x| x.to_string()).collect();
+        assert_bad(&a, &expect, &[&out]);
+    }
+    let empty = d.path("empty");
+    std::fs::create_dir_all(&empty).unwrap();
+    assert_bad(
+        &[
+            "studies".into(),
+            "merge".into(),
+            s(&empty),
+            "--out".into(),
+            o.clone(),
+        ],
+        &["no study manifests"],
+        &[&out],
+    );
+    // One shard of two: the merge names the missing cases and writes nothing.
+    let shard = d.path("shard1");
+    let r = common::pound(&[
+        "studies",
+        "run",
+        "paper",
+        "--shard",
+        "1/2",
+        "--studies-dir",
+        &studies,
+        "--out",
+        &s(&shard),
+    ]);
+    assert_eq!(r.status.code(), Some(0));
+    assert_bad(
+        &[
+            "studies".into(),
+            "merge".into(),
+            s(&shard),
+            "--studies-dir".into(),
+            studies.clone(),
+            "--out".into(),
+            o.clone(),
+        ],
+        &["study `paper`", "missing ids"],
+        &[&out],
+    );
+}
+
+/// `--out` and `--history` naming one file (the JSON would replace the history) are refused
+/// before the analysis runs.
+#[test]
+fn out_and_history_on_one_file_are_refused() {
+    let d = TempDir::new("samefile");
+    let scene = d.write("scene.toml", &base_scene());
+    let f = d.path("both.out");
+    let mut a = run_args(&scene, &f, &f, &[]);
+    assert_bad(&a, &["--out and --history are the same file"], &[&f]);
+    // The same file by another spelling.
+    let other = d.path("x/../both.out");
+    std::fs::create_dir_all(d.path("x")).unwrap();
+    a = run_args(&scene, &f, &other, &[]);
+    assert_bad(&a, &["the same file"], &[&f]);
 }
 
 /// `--records` with a study that runs one fixed scene and record (the paper's example, the

@@ -339,11 +339,25 @@ fn cli_prints_the_script() {
     assert!(script.starts_with("#!/usr/bin/env python3\n"));
     assert!(script.contains("\"gap\": 0.05"), "the override is applied");
     assert!(script.contains("SCENE = \"paper-pair\""));
+    // The paper scene's gap element is adaptive: the Newmark script says so.
     assert!(
-        stderr.is_empty(),
-        "no warnings for the linear law: {stderr}"
+        stderr.contains("integrates with Newmark") && stderr.contains("adaptive"),
+        "{stderr}"
     );
     assert_valid_python(&script, "CLI");
+    let newmark = pound(&[
+        "export",
+        "opensees",
+        path.to_str().unwrap(),
+        "--set",
+        "gap_element.integrator=newmark",
+    ]);
+    let stderr = String::from_utf8_lossy(&newmark.stderr);
+    assert_eq!(newmark.status.code(), Some(0), "{stderr}");
+    assert!(
+        stderr.is_empty(),
+        "no warnings for the linear law with Newmark: {stderr}"
+    );
 }
 
 #[test]

@@ -115,6 +115,75 @@ fn read_only_out_is_not_replaced_and_nothing_is_left_behind() {
     assert!(!hist.exists(), "history left behind");
 }
 
+/// A history file that was there before survives a failed `--out` unchanged (the two files
+/// are written together or not at all), and no temporary file is left in its folder.
+#[test]
+fn failed_out_leaves_an_existing_history_as_it_was() {
+    let d = TempDir::new("keephist");
+    let hist = d.write("history.csv", "earlier run\n");
+    let blocker = d.write("afile", "");
+    let out = blocker.join("run.json"); // its folder is a file: cannot be written
+    let o = pound(&[
+        "run",
+        &scene(),
+        "--method",
+        "momentum",
+        "--no-baseline",
+        "--set",
+        "analysis.duration=2",
+        "--history",
+        hist.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("run.json"), "{err}");
+    assert_eq!(std::fs::read_to_string(&hist).unwrap(), "earlier run\n");
+    let left: Vec<_> = std::fs::read_dir(hist.parent().unwrap())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.contains(".tmp-"))
+        .collect();
+    assert!(left.is_empty(), "temporary files left: {left:?}");
+}
+
+/// The linear gap element is an elastic spring: a restitution below 1 (or `tension`) that it
+/// cannot use is said on stderr, and the run goes on; the Kelvin–Voigt law says nothing.
+#[test]
+fn gap_settings_the_linear_law_ignores_are_noted() {
+    let run = |law: &str| {
+        let o = pound(&[
+            "run",
+            &scene(),
+            "--method",
+            "gap",
+            "--no-baseline",
+            "--set",
+            "analysis.duration=1",
+            "--set",
+            &format!("gap_element.law={law}"),
+            "--set",
+            "contacts.0.restitution=0.5",
+            "--set",
+            "gap_element.tension=true",
+        ]);
+        assert_eq!(o.status.code(), Some(0));
+        String::from_utf8_lossy(&o.stderr).into_owned()
+    };
+    let lin = run("linear");
+    assert!(
+        lin.contains("contacts.0.restitution = 0.5 is not used by the linear gap element"),
+        "{lin}"
+    );
+    assert!(
+        lin.contains("gap_element.tension = true applies to the kelvin-voigt law only"),
+        "{lin}"
+    );
+    let kv = run("kelvin-voigt");
+    assert!(!kv.contains("note:"), "{kv}");
+}
+
 const FREE_SCENE: &str = r#"
 [[buildings]]
 name = "left"

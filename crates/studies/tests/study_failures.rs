@@ -9,9 +9,70 @@ fn studies_dir() -> String {
     concat!(env!("CARGO_MANIFEST_DIR"), "/../../studies").to_string()
 }
 
+/// A study whose cases fail in the solver (here the momentum method at c_r = 0 without its
+/// persistent-contact phase: chattering stalls it) exits 4 and names the failed cases, on
+/// stderr and in the summary; the tables are still written.
 #[test]
 fn failed_cases_exit_4_and_are_named() {
     let d = TempDir::new("failedcases");
+    std::fs::create_dir_all(d.path("defs")).unwrap();
+    let paper = std::fs::read_to_string(format!("{}/paper/scene.toml", studies_dir())).unwrap();
+    let rec = format!(
+        "{}/../data/ground-motions/RSN752_LOMAP_CAP000.AT2",
+        studies_dir()
+    );
+    d.write(
+        "defs/scene.toml",
+        &paper
+            .replace("[momentum]\n", "[momentum]\npersistent_contact = false\n")
+            .replace("../../data/", &format!("{}/../data/", studies_dir())),
+    );
+    d.write(
+        "defs/restitution.toml",
+        &format!(
+            "scene = \"scene.toml\"\npga = 0.40\nrecords = [\"{rec}\"]\ngap = 0.10\nrestitution = [0.0]\ngap_stiffness = [1.0e10]\nrecord_table = \"{}/../data/ground-motions/records.csv\"\n",
+            studies_dir()
+        ),
+    );
+    let out = d.path("out");
+    let o = pound(&[
+        "studies",
+        "run",
+        "restitution",
+        "--quick",
+        "--studies-dir",
+        d.path("defs").to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(4), "{err}");
+    assert!(err.contains("case(s) failed"), "{err}");
+    assert!(
+        err.contains("Stalled") || err.contains("stall"),
+        "the reason is named: {err}"
+    );
+    let summary = std::fs::read_to_string(out.join("restitution/summary.md")).unwrap();
+    assert!(summary.contains("### Failed cases"), "{summary}");
+    let cases: Vec<serde_json::Value> =
+        serde_json::from_str(&std::fs::read_to_string(out.join("restitution/cases.json")).unwrap())
+            .unwrap();
+    let failed: Vec<&str> = cases
+        .iter()
+        .filter(|c| c["status"] != "ok")
+        .map(|c| c["spec"]["id"].as_str().unwrap())
+        .collect();
+    assert!(!failed.is_empty());
+    for id in failed {
+        assert!(summary.contains(id), "{id} not named in the summary");
+    }
+}
+
+/// A record that cannot be read, given with `--records`, is bad input: exit 2 before any
+/// case runs, the file and line named, no results folder.
+#[test]
+fn unreadable_record_is_refused_before_the_sweep() {
+    let d = TempDir::new("badrecord");
     let rec = d.write("garbage.AT2", "junk\n1 2 3\nfoo\n");
     let out = d.path("out");
     let o = pound(&[
@@ -27,23 +88,9 @@ fn failed_cases_exit_4_and_are_named() {
         out.to_str().unwrap(),
     ]);
     let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(4), "{err}");
-    assert!(err.contains("case(s) failed"), "{err}");
-    assert!(
-        err.contains("garbage.AT2 line 3"),
-        "the reason is named: {err}"
-    );
-    let summary = std::fs::read_to_string(out.join("gap/summary.md")).unwrap();
-    assert!(summary.contains("### Failed cases"), "{summary}");
-    // Every case is listed by id.
-    let cases: Vec<serde_json::Value> =
-        serde_json::from_str(&std::fs::read_to_string(out.join("gap/cases.json")).unwrap())
-            .unwrap();
-    assert!(!cases.is_empty());
-    for c in &cases {
-        let id = c["spec"]["id"].as_str().unwrap();
-        assert!(summary.contains(id), "{id} not named in the summary");
-    }
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("garbage.AT2 line 3"), "{err}");
+    assert!(!out.exists(), "nothing written");
 }
 
 #[test]

@@ -182,6 +182,79 @@ fn timed_cases_run_alone_after_the_others() {
     assert_eq!(res.get(&u1).wall_seconds_all.len(), 1);
 }
 
+/// A Slurm job array gives the shard; variables that are there but do not give one (not
+/// numbers, an id out of range, sparse or stepped arrays) are errors, not a whole sweep.
+#[test]
+fn slurm_array_variables_give_a_shard_or_an_error() {
+    let env = |pairs: &'static [(&'static str, &'static str)]| {
+        move |k: &str| {
+            pairs
+                .iter()
+                .find(|(a, _)| *a == k)
+                .map(|(_, v)| v.to_string())
+        }
+    };
+    assert_eq!(Shard::from_env(env(&[])), Ok(None));
+    assert_eq!(
+        Shard::from_env(env(&[
+            ("SLURM_ARRAY_TASK_ID", "3"),
+            ("SLURM_ARRAY_TASK_COUNT", "4")
+        ])),
+        Ok(Some(Shard { index: 3, count: 4 }))
+    );
+    // An array 0-3: ids mapped to 1 … 4.
+    assert_eq!(
+        Shard::from_env(env(&[
+            ("SLURM_ARRAY_TASK_ID", "0"),
+            ("SLURM_ARRAY_TASK_COUNT", "4"),
+            ("SLURM_ARRAY_TASK_MIN", "0"),
+            ("SLURM_ARRAY_TASK_MAX", "3"),
+            ("SLURM_ARRAY_TASK_STEP", "1")
+        ])),
+        Ok(Some(Shard { index: 1, count: 4 }))
+    );
+    for (bad, says) in [
+        (
+            &[
+                ("SLURM_ARRAY_TASK_ID", "abc"),
+                ("SLURM_ARRAY_TASK_COUNT", "4"),
+            ][..],
+            "not a whole number",
+        ),
+        (
+            &[
+                ("SLURM_ARRAY_TASK_ID", "5"),
+                ("SLURM_ARRAY_TASK_COUNT", "4"),
+            ][..],
+            "outside",
+        ),
+        (
+            &[("SLURM_ARRAY_TASK_ID", "2")][..],
+            "SLURM_ARRAY_TASK_COUNT is not",
+        ),
+        (
+            &[
+                ("SLURM_ARRAY_TASK_ID", "3"),
+                ("SLURM_ARRAY_TASK_COUNT", "3"),
+                ("SLURM_ARRAY_TASK_MIN", "1"),
+                ("SLURM_ARRAY_TASK_MAX", "5"),
+            ][..],
+            "sparse",
+        ),
+        (
+            &[
+                ("SLURM_ARRAY_TASK_ID", "3"),
+                ("SLURM_ARRAY_TASK_COUNT", "8"),
+                ("SLURM_ARRAY_TASK_STEP", "2"),
+            ][..],
+            "stepped",
+        ),
+    ] {
+        let e = Shard::from_env(env(bad)).unwrap_err();
+        assert!(e.contains(says), "{e}");
+    }
+}
+
 #[test]
 fn case_ids_are_stable() {
     let a = CaseSpec::new("paper/scene.toml", solvers::Method::Gap)

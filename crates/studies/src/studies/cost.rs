@@ -231,7 +231,7 @@ impl Study for Cost {
         );
         let mut cpu = Table::new(
             &format!(
-                "Accuracy against wall time: fastest, median and slowest of {} runs (machine-dependent; the sweep runs cases side by side, so the spread includes their interference)",
+                "Accuracy against wall time: fastest, median and slowest of {} runs (machine-dependent; each timed case runs alone, after the untimed ones, so the spread is the machine's own noise)",
                 d.repeat
             ),
             &[

@@ -287,6 +287,20 @@ pub fn all_cases(st: &dyn Study, ctx: &Ctx) -> Result<Vec<CaseSpec>> {
             });
         }
     }
+    // Every record (a study's own or `--records`) is read and scaled once before anything
+    // runs, with the overrides of the first case that uses it: a record that cannot be read
+    // or scaled is bad input (exit 2, file and line named), not a sweep of failed cases.
+    let mut seen = std::collections::BTreeSet::new();
+    for c in cases.iter().filter(|c| seen.insert(c.record.clone())) {
+        c.load_scene(&ctx.studies_dir)
+            .map_err(|message| StudyError::Definition {
+                file: ctx.def_file.clone(),
+                message: match &c.record {
+                    Some(r) => format!("record {r}: {message}"),
+                    None => message,
+                },
+            })?;
+    }
     let baselines: Vec<CaseSpec> = cases.iter().map(|c| c.baseline()).collect();
     Ok(dedup(cases.into_iter().chain(baselines).collect()))
 }
@@ -428,8 +442,9 @@ pub fn merge(
     out: &Path,
     studies_dir: &Path,
 ) -> Result<(Vec<String>, Vec<String>)> {
-    let mut merged = Vec::new();
-    let mut unexpected = Vec::new();
+    // First every study's case list and its completeness, so that a missing case of any
+    // study stops the merge before anything is written.
+    let mut plans = Vec::new();
     for &name in NAMES.iter().chain(&EXTRA) {
         let manifests: Vec<PathBuf> = dirs
             .iter()
@@ -466,6 +481,39 @@ pub fn merge(
         )?;
         let specs = all_cases(st, &ctx)?;
         let dest = out.join(name).join("cases");
+        let file = |dir: &Path, id: &str| dir.join(format!("{id}.json"));
+        let missing: Vec<String> = specs
+            .iter()
+            .filter(|s| {
+                !file(&dest, &s.id).is_file()
+                    && !dirs
+                        .iter()
+                        .any(|d| file(&d.join(name).join("cases"), &s.id).is_file())
+            })
+            .map(|s| s.id.clone())
+            .collect();
+        if !missing.is_empty() {
+            return Err(StudyError::Incomplete {
+                study: name.into(),
+                missing: missing.len(),
+                total: specs.len(),
+                ids: missing.join(", "),
+            });
+        }
+        plans.push((name, st, m, ctx, specs, dest));
+    }
+    if plans.is_empty() {
+        return Err(StudyError::Other(format!(
+            "no study manifests found under {}",
+            dirs.iter()
+                .map(|d| d.display().to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        )));
+    }
+    let mut merged = Vec::new();
+    let mut unexpected = Vec::new();
+    for (name, st, m, ctx, specs, dest) in plans {
         for d in dirs {
             let src = d.join(name).join("cases");
             if std::fs::canonicalize(&src).ok() == std::fs::canonicalize(&dest).ok() {
@@ -498,15 +546,6 @@ pub fn merge(
                 .map(|u| format!("{name}: {u}")),
         );
         merged.push(name.to_string());
-    }
-    if merged.is_empty() {
-        return Err(StudyError::Other(format!(
-            "no study manifests found under {}",
-            dirs.iter()
-                .map(|d| d.display().to_string())
-                .collect::<Vec<_>>()
-                .join(", ")
-        )));
     }
     Ok((merged, unexpected))
 }
