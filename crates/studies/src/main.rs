@@ -76,7 +76,7 @@ enum Command {
         /// Override a scene value: PATH=VALUE on a dotted TOML path (repeatable).
         #[arg(long = "set", value_name = "PATH=VALUE")]
         set: Vec<String>,
-        /// Write the full result as JSON here (otherwise a summary is printed).
+        /// Write the full result as JSON here (`-`: on stdout); otherwise a summary is printed.
         #[arg(long)]
         out: Option<PathBuf>,
         /// Write floor displacements and story shears over time as CSV here.
@@ -211,6 +211,10 @@ const MAX_THREADS: usize = 1024;
 #[derive(Debug, thiserror::Error)]
 #[error("{0}")]
 struct InputError(String);
+
+/// Above this PGA (g) a scene's ground motion is almost surely in the wrong units (the
+/// largest recorded peaks are about 3–4 g; a record in cm/s² read as g is ~1 000 g).
+const PLAUSIBLE_PGA_G: f64 = 5.0;
 
 /// Whether two output paths name the same file (the same path, or the same existing file).
 fn same_file(a: &std::path::Path, b: &std::path::Path) -> bool {
@@ -424,6 +428,14 @@ fn run(cli: Cli) -> Result<()> {
                     eprintln!("note: {w}");
                 }
             }
+            if let Some(g) = &scene.ground {
+                let pga = g.pga() / structure::G;
+                if pga > PLAUSIBLE_PGA_G {
+                    eprintln!(
+                        "warning: the ground motion's PGA is {pga:.3} g, above {PLAUSIBLE_PGA_G} g, more than any recorded earthquake: check the record's units (ground_motion.units) and ground_motion.scale"
+                    );
+                }
+            }
             if let (Method::Momentum, Some(n)) = (method, scene.momentum.modes) {
                 for b in scene.buildings.iter().filter(|b| b.n_floors() < n) {
                     eprintln!(
@@ -461,18 +473,25 @@ fn run(cli: Cli) -> Result<()> {
             if let (Some(p), Some(h)) = (&history, &hist) {
                 files.push((p.clone(), io::history_csv(&scene, h)?.into_bytes()));
             }
+            let mut stdout_json = None;
             if let Some(p) = &out {
                 let doc = report::run_json(&scene, &set, &result, amplification.as_deref());
                 let mut s = serde_json::to_string_pretty(&doc)?;
                 s.push('\n');
-                files.push((p.clone(), s.into_bytes()));
+                if p.as_os_str() == "-" {
+                    stdout_json = Some(s);
+                } else {
+                    files.push((p.clone(), s.into_bytes()));
+                }
             }
             let refs: Vec<(&std::path::Path, &[u8])> = files
                 .iter()
                 .map(|(p, b)| (p.as_path(), b.as_slice()))
                 .collect();
             io::write_all_atomic(&refs)?;
-            if out.is_none() {
+            if let Some(s) = stdout_json {
+                print!("{s}");
+            } else if out.is_none() {
                 print!(
                     "{}",
                     report::run_summary(&scene, &result, amplification.as_deref())

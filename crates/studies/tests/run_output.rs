@@ -184,6 +184,67 @@ fn gap_settings_the_linear_law_ignores_are_noted() {
     assert!(!kv.contains("note:"), "{kv}");
 }
 
+/// `--out -` prints the JSON on stdout (and nothing else there), for a pipe.
+#[test]
+fn out_dash_prints_the_json_on_stdout() {
+    let o = pound(&[
+        "run",
+        &scene(),
+        "--method",
+        "momentum",
+        "--no-baseline",
+        "--set",
+        "analysis.duration=2",
+        "--out",
+        "-",
+    ]);
+    assert_eq!(o.status.code(), Some(0));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("stdout is the JSON");
+    assert!(v["buildings"].is_array());
+    assert!(!std::path::Path::new("-").exists(), "no file named -");
+}
+
+/// A ground motion far above any recorded PGA (here a record scaled by 981, as a record in
+/// cm/s² read as g would be) is run, with a warning that names the keys to check.
+#[test]
+fn implausible_pga_is_warned_about() {
+    let d = TempDir::new("bigpga");
+    let rec = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../data/ground-motions/RSN752_LOMAP_CAP000.AT2"
+    );
+    let text = std::fs::read_to_string(scene())
+        .unwrap()
+        .replace("pga = 0.40", "scale = 981.0")
+        .replace("../../data/ground-motions/RSN752_LOMAP_CAP000.AT2", rec);
+    let sc = d.write("scene.toml", &text);
+    let o = pound(&[
+        "run",
+        sc.to_str().unwrap(),
+        "--method",
+        "momentum",
+        "--no-baseline",
+        "--set",
+        "analysis.duration=1",
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    assert!(
+        err.contains("PGA is") && err.contains("ground_motion.units"),
+        "{err}"
+    );
+    let normal = pound(&[
+        "run",
+        &scene(),
+        "--method",
+        "momentum",
+        "--no-baseline",
+        "--set",
+        "analysis.duration=1",
+    ]);
+    assert!(!String::from_utf8_lossy(&normal.stderr).contains("PGA is"));
+}
+
 const FREE_SCENE: &str = r#"
 [[buildings]]
 name = "left"
