@@ -23,39 +23,7 @@ pub enum OutputError {
 /// Writes `bytes` to `path` atomically (temporary file in the same folder, then rename).
 /// An existing read-only file at `path` is an error, not replaced.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
-    let err = |error| OutputError::Io {
-        path: path.display().to_string(),
-        error,
-    };
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    std::fs::create_dir_all(&dir).map_err(err)?;
-    // A rename replaces even a read-only file: refuse one explicitly.
-    if let Ok(m) = std::fs::metadata(path) {
-        if m.permissions().readonly() {
-            return Err(err(std::io::Error::new(
-                std::io::ErrorKind::PermissionDenied,
-                "the file exists and is read-only; it is not replaced",
-            )));
-        }
-    }
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let tmp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
-    let result = (|| {
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        std::fs::rename(&tmp, path)
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result.map_err(err)
+    write_all_atomic(&[(path, bytes)])
 }
 
 /// Writes several files all or nothing: every file goes to a temporary file in its folder

@@ -4,6 +4,22 @@
 mod common;
 use common::{pound, TempDir};
 
+/// `pound run SCENE --method momentum --no-baseline --set analysis.duration=SECS EXTRA...`.
+fn run_momentum(scene: &str, secs: &str, extra: &[&str]) -> std::process::Output {
+    let dur = format!("analysis.duration={secs}");
+    let mut a = vec![
+        "run",
+        scene,
+        "--method",
+        "momentum",
+        "--no-baseline",
+        "--set",
+        &dur,
+    ];
+    a.extend_from_slice(extra);
+    pound(&a)
+}
+
 fn scene() -> String {
     concat!(
         env!("CARGO_MANIFEST_DIR"),
@@ -123,19 +139,16 @@ fn failed_out_leaves_an_existing_history_as_it_was() {
     let hist = d.write("history.csv", "earlier run\n");
     let blocker = d.write("afile", "");
     let out = blocker.join("run.json"); // its folder is a file: cannot be written
-    let o = pound(&[
-        "run",
+    let o = run_momentum(
         &scene(),
-        "--method",
-        "momentum",
-        "--no-baseline",
-        "--set",
-        "analysis.duration=2",
-        "--history",
-        hist.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+        "2",
+        &[
+            "--history",
+            hist.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ],
+    );
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{err}");
     assert!(err.contains("run.json"), "{err}");
@@ -187,17 +200,7 @@ fn gap_settings_the_linear_law_ignores_are_noted() {
 /// `--out -` prints the JSON on stdout (and nothing else there), for a pipe.
 #[test]
 fn out_dash_prints_the_json_on_stdout() {
-    let o = pound(&[
-        "run",
-        &scene(),
-        "--method",
-        "momentum",
-        "--no-baseline",
-        "--set",
-        "analysis.duration=2",
-        "--out",
-        "-",
-    ]);
+    let o = run_momentum(&scene(), "2", &["--out", "-"]);
     assert_eq!(o.status.code(), Some(0));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("stdout is the JSON");
     assert!(v["buildings"].is_array());
@@ -218,30 +221,14 @@ fn implausible_pga_is_warned_about() {
         .replace("pga = 0.40", "scale = 981.0")
         .replace("../../data/ground-motions/RSN752_LOMAP_CAP000.AT2", rec);
     let sc = d.write("scene.toml", &text);
-    let o = pound(&[
-        "run",
-        sc.to_str().unwrap(),
-        "--method",
-        "momentum",
-        "--no-baseline",
-        "--set",
-        "analysis.duration=1",
-    ]);
+    let o = run_momentum(sc.to_str().unwrap(), "1", &[]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(0), "{err}");
     assert!(
         err.contains("PGA is") && err.contains("ground_motion.units"),
         "{err}"
     );
-    let normal = pound(&[
-        "run",
-        &scene(),
-        "--method",
-        "momentum",
-        "--no-baseline",
-        "--set",
-        "analysis.duration=1",
-    ]);
+    let normal = run_momentum(&scene(), "1", &[]);
     assert!(!String::from_utf8_lossy(&normal.stderr).contains("PGA is"));
 }
 
