@@ -89,6 +89,17 @@ pub enum ContactLaw {
     HertzDamp,
 }
 
+impl ContactLaw {
+    /// The law's name in a scene file (`gap_element.law`).
+    pub fn key(self) -> &'static str {
+        match self {
+            ContactLaw::Linear => "linear",
+            ContactLaw::KelvinVoigt => "kelvin-voigt",
+            ContactLaw::HertzDamp => "hertz-damp",
+        }
+    }
+}
+
 /// Time integrator of the gap-element solver (`gap_element.integrator`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, serde::Serialize, Default)]
 #[serde(rename_all = "kebab-case")]

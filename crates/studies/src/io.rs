@@ -86,12 +86,21 @@ pub fn write_all_atomic(files: &[(&Path, &[u8])]) -> Result<(), OutputError> {
 
 /// Serialises `value` as pretty JSON and writes it atomically.
 pub fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<(), OutputError> {
+    write_atomic(
+        path,
+        json_text(value, &path.display().to_string())?.as_bytes(),
+    )
+}
+
+/// `value` as pretty JSON with a final newline, the text [`write_json`] writes (`what` names
+/// it in an error).
+pub fn json_text<T: serde::Serialize>(value: &T, what: &str) -> Result<String, OutputError> {
     let mut s = serde_json::to_string_pretty(value).map_err(|source| OutputError::Json {
-        what: path.display().to_string(),
+        what: what.to_string(),
         source,
     })?;
     s.push('\n');
-    write_atomic(path, s.as_bytes())
+    Ok(s)
 }
 
 /// CSV text of a history, one row per sample (record points and event instants, so the

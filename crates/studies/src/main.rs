@@ -213,7 +213,7 @@ const MAX_THREADS: usize = 1024;
 struct InputError(String);
 
 /// Above this PGA (g) a scene's ground motion is almost surely in the wrong units (the
-/// largest recorded peaks are about 3–4 g; a record in cm/s² read as g is ~1 000 g).
+/// largest recorded peaks are about 3–4 g; a record in cm/s² read as g peaks at hundreds of g).
 const PLAUSIBLE_PGA_G: f64 = 5.0;
 
 /// Whether two output paths name the same file (the same path, or the same existing file).
@@ -252,11 +252,7 @@ fn gap_law_notes(scene: &structure::Scene) -> Vec<String> {
     if g.tension && g.law != ContactLaw::KelvinVoigt {
         notes.push(format!(
             "gap_element.tension = true applies to the kelvin-voigt law only; the {} law ignores it",
-            match g.law {
-                ContactLaw::Linear => "linear",
-                ContactLaw::HertzDamp => "hertz-damp",
-                ContactLaw::KelvinVoigt => "kelvin-voigt",
-            }
+            g.law.key()
         ));
     }
     notes
@@ -476,8 +472,7 @@ fn run(cli: Cli) -> Result<()> {
             let mut stdout_json = None;
             if let Some(p) = &out {
                 let doc = report::run_json(&scene, &set, &result, amplification.as_deref());
-                let mut s = serde_json::to_string_pretty(&doc)?;
-                s.push('\n');
+                let s = io::json_text(&doc, &p.display().to_string())?;
                 if p.as_os_str() == "-" {
                     stdout_json = Some(s);
                 } else {
@@ -577,13 +572,15 @@ fn studies_command(command: StudiesCommand) -> Result<()> {
                 Some(s) => Some(s.parse::<studies::sweep::Shard>().map_err(input)?),
                 None => studies::sweep::Shard::from_slurm().map_err(input)?,
             };
-            if !records.is_empty() && !all {
-                let fixed: Vec<&str> = names
-                    .iter()
-                    .map(String::as_str)
-                    .filter(|n| !st::TAKE_RECORDS.contains(n))
-                    .collect();
-                if !fixed.is_empty() {
+            // Studies with one fixed scene and record: named with --records, an error; taken
+            // in by --all, said on stderr.
+            let fixed: Vec<&str> = names
+                .iter()
+                .map(String::as_str)
+                .filter(|n| !st::TAKE_RECORDS.contains(n))
+                .collect();
+            if !records.is_empty() && !fixed.is_empty() {
+                if !all {
                     return Err(input(format!(
                         "--records: {} {} one fixed scene and record, not yours; --records applies to {}",
                         fixed.iter().map(|n| format!("`{n}`")).collect::<Vec<_>>().join(", "),
@@ -591,13 +588,6 @@ fn studies_command(command: StudiesCommand) -> Result<()> {
                         st::TAKE_RECORDS.join(", ")
                     )));
                 }
-            }
-            if !records.is_empty() && all {
-                let fixed: Vec<&str> = st::NAMES
-                    .iter()
-                    .copied()
-                    .filter(|n| !st::TAKE_RECORDS.contains(n))
-                    .collect();
                 eprintln!(
                     "--records: {} run their own scene and record",
                     fixed.join(", ")
@@ -719,10 +709,8 @@ fn studies_command(command: StudiesCommand) -> Result<()> {
             let (merged, unexpected) =
                 st::merge(&dirs, &out, &studies_dir).map_err(|e| match e {
                     studies::sweep::StudyError::Incomplete { .. }
-                    | studies::sweep::StudyError::Definition { .. } => input(e),
-                    studies::sweep::StudyError::Other(m) if m.starts_with("no study manifests") => {
-                        input(m)
-                    }
+                    | studies::sweep::StudyError::Definition { .. }
+                    | studies::sweep::StudyError::NoManifests { .. } => input(e),
                     e => anyhow::Error::new(e),
                 })?;
             eprintln!("merged {} into {}", merged.join(", "), out.display());

@@ -42,6 +42,9 @@ pub enum StudyError {
         total: usize,
         ids: String,
     },
+    /// `studies merge` found no `<study>/manifest.json` under any of the folders.
+    #[error("no study manifests found under {dirs}")]
+    NoManifests { dirs: String },
     #[error("{0}")]
     Other(String),
 }

@@ -10,6 +10,18 @@ fn studies_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../studies")
 }
 
+/// Engine options for `run_cases` on 2 threads, cases written under `study_dir`.
+fn engine(study_dir: PathBuf, fresh: bool) -> EngineOptions {
+    EngineOptions {
+        study_dir,
+        studies_dir: studies_dir(),
+        threads: Some(2),
+        shard: None,
+        progress: false,
+        fresh,
+    }
+}
+
 fn tmp(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("pound-sweep-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
@@ -124,14 +136,7 @@ fn failing_cases_become_rows() {
     let storm = base.clone().with("momentum.persistent_contact", "false");
     let bad = base.clone().with("contacts.0.restitution", "1.5");
     let specs = vec![base.clone(), storm.clone(), bad.clone()];
-    let opts = EngineOptions {
-        study_dir: out.clone(),
-        studies_dir: studies_dir(),
-        threads: Some(2),
-        shard: None,
-        progress: false,
-        fresh: false,
-    };
+    let opts = engine(out.clone(), false);
     let s = run_cases(&specs, &opts).unwrap();
     assert_eq!((s.ran, s.failed), (3, 2));
     let res = studies::sweep::collect("t", &specs, &out).unwrap();
@@ -167,14 +172,7 @@ fn timed_cases_run_alone_after_the_others() {
     assert_eq!(ids(&parallel), vec![u1.id.clone(), u2.id.clone()]);
     assert_eq!(ids(&alone), vec![t1.id.clone(), t2.id.clone()]);
     let out = tmp("timed");
-    let opts = EngineOptions {
-        study_dir: out.clone(),
-        studies_dir: studies_dir(),
-        threads: Some(2),
-        shard: None,
-        progress: false,
-        fresh: true,
-    };
+    let opts = engine(out.clone(), true);
     let s = run_cases(&specs, &opts).unwrap();
     assert_eq!((s.ran, s.failed), (4, 0));
     let res = studies::sweep::collect("t", &specs, &out).unwrap();
@@ -291,14 +289,7 @@ fn data_tables_are_tidy() {
         .param("gap_m", 0.1);
     let bad = base.clone().with("contacts.0.restitution", "1.5");
     let run = |dir: &std::path::PathBuf, specs: Vec<CaseSpec>| {
-        let opts = EngineOptions {
-            study_dir: dir.clone(),
-            studies_dir: studies_dir(),
-            threads: Some(2),
-            shard: None,
-            progress: false,
-            fresh: true,
-        };
+        let opts = engine(dir.clone(), true);
         run_cases(&specs, &opts).unwrap();
         let res = studies::sweep::collect("t", &specs, dir).unwrap();
         studies::sweep::write_cases_table(dir, &res).unwrap();

@@ -503,13 +503,13 @@ pub fn merge(
         plans.push((name, st, m, ctx, specs, dest));
     }
     if plans.is_empty() {
-        return Err(StudyError::Other(format!(
-            "no study manifests found under {}",
-            dirs.iter()
+        return Err(StudyError::NoManifests {
+            dirs: dirs
+                .iter()
                 .map(|d| d.display().to_string())
                 .collect::<Vec<_>>()
-                .join(", ")
-        )));
+                .join(", "),
+        });
     }
     let mut merged = Vec::new();
     let mut unexpected = Vec::new();

@@ -33,11 +33,9 @@ const METHODS: [&str; 4] = ["momentum", "gap adaptive", "gap newmark", "impulse"
 /// The records: those of `--records` if given, else every `*.AT2` in the folders, sorted by
 /// file name within each folder. With `--quick`: the first three.
 fn records(ctx: &Ctx, d: &Def) -> Result<Vec<String>> {
-    let mut out = Vec::new();
-    if !ctx.opts.records.is_empty() {
-        out = ctx.opts.records.clone();
-    }
-    for dir in d.record_dirs.iter().filter(|_| ctx.opts.records.is_empty()) {
+    let mut out = ctx.opts.records.clone();
+    let dirs: &[String] = if out.is_empty() { &d.record_dirs } else { &[] };
+    for dir in dirs {
         let full = ctx.studies_dir.join(dir);
         let rd = std::fs::read_dir(&full).map_err(|e| StudyError::Read {
             path: full.display().to_string(),
