@@ -24,4 +24,4 @@ pub const G: f64 = 9.80665;
 
 pub use ground::{GroundMotion, RecordError, RecordFormat, Units};
 pub use model::{Building, Damping, ModelError, Modes};
-pub use scene::{Contact, GapElementOptions, MomentumOptions, Scene, SceneError};
+pub use scene::{Contact, GapElementOptions, MomentumOptions, Purpose, Scene, SceneError};

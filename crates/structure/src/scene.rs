@@ -223,7 +223,9 @@ pub struct Scene {
     /// Ground acceleration (m/s², already scaled); `None` = free vibration.
     pub ground: Option<GroundMotion>,
     pub ground_source: Option<GroundMotionSource>,
-    /// Analysis duration, s.
+    /// Analysis duration, s. `analysis.duration`, else the record's duration. A scene read
+    /// for its structure alone ([`Purpose::Structure`]) without either has 0 here: it
+    /// cannot be analysed.
     pub duration: f64,
     pub momentum: MomentumOptions,
     pub gap_element: GapElementOptions,
@@ -483,6 +485,17 @@ struct RawGap {
 // ---------------------------------------------------------------------------------------
 // Loading
 
+/// What a scene is read for: what it must define.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Purpose {
+    /// An analysis: the duration is `analysis.duration` or the record's (one is required).
+    Analysis,
+    /// The structure alone (modes, frequencies, contact flexibility): the duration may be
+    /// missing (then [`Scene::duration`] is 0). Every other key is read and checked as for
+    /// an analysis, the record included.
+    Structure,
+}
+
 impl Scene {
     /// Reads and validates a scene file.
     pub fn from_file(path: &Path) -> Result<Scene, SceneError> {
@@ -494,13 +507,22 @@ impl Scene {
         path: &Path,
         overrides: &[String],
     ) -> Result<Scene, SceneError> {
+        Self::from_file_for(path, overrides, Purpose::Analysis)
+    }
+
+    /// [`Scene::from_file_with_overrides`] for a [`Purpose`].
+    pub fn from_file_for(
+        path: &Path,
+        overrides: &[String],
+        purpose: Purpose,
+    ) -> Result<Scene, SceneError> {
         let file = path.display().to_string();
         let text = std::fs::read_to_string(path).map_err(|error| SceneError::Io {
             file: file.clone(),
             error,
         })?;
         let base = path.parent().unwrap_or(Path::new("."));
-        let mut scene = Self::from_str_with_overrides(&text, &file, base, overrides)?;
+        let mut scene = Self::from_str_for(&text, &file, base, overrides, purpose)?;
         scene.file = Some(path.to_path_buf());
         Ok(scene)
     }
@@ -512,6 +534,17 @@ impl Scene {
         origin: &str,
         base_dir: &Path,
         overrides: &[String],
+    ) -> Result<Scene, SceneError> {
+        Self::from_str_for(text, origin, base_dir, overrides, Purpose::Analysis)
+    }
+
+    /// [`Scene::from_str_with_overrides`] for a [`Purpose`].
+    pub fn from_str_for(
+        text: &str,
+        origin: &str,
+        base_dir: &Path,
+        overrides: &[String],
+        purpose: Purpose,
     ) -> Result<Scene, SceneError> {
         let parse_err = |message: String| SceneError::Parse {
             file: origin.to_string(),
@@ -537,7 +570,7 @@ impl Scene {
                 },
             )?
         };
-        validate(raw, origin, base_dir)
+        validate(raw, origin, base_dir, purpose)
     }
 
     /// Index of the building called `name`.
@@ -628,7 +661,12 @@ pub fn apply_override(table: &mut toml::Table, expr: &str) -> Result<(), SceneEr
 /// an explicit `masses` list is bounded by the file itself).
 pub const MAX_STORIES: usize = 1_000;
 
-fn validate(raw: RawScene, origin: &str, base_dir: &Path) -> Result<Scene, SceneError> {
+fn validate(
+    raw: RawScene,
+    origin: &str,
+    base_dir: &Path,
+    purpose: Purpose,
+) -> Result<Scene, SceneError> {
     let invalid = |key: String, message: String| SceneError::Invalid {
         file: origin.to_string(),
         key,
@@ -1278,6 +1316,7 @@ fn validate(raw: RawScene, origin: &str, base_dir: &Path) -> Result<Scene, Scene
             d
         }
         (None, Some(g)) => g.duration(),
+        (None, None) if purpose == Purpose::Structure => 0.0,
         (None, None) => {
             return Err(invalid(
                 "analysis.duration".into(),
@@ -1358,7 +1397,8 @@ fn validate(raw: RawScene, origin: &str, base_dir: &Path) -> Result<Scene, Scene
         gap.tolerance = t;
     }
     if let Some(dt) = rg.time_step {
-        if !(dt.is_finite() && dt > 0.0 && dt <= duration) {
+        // (A structure-only scene without a duration has no bound on the step.)
+        if !(dt.is_finite() && dt > 0.0 && (dt <= duration || duration == 0.0)) {
             return Err(invalid(
                 "gap_element.time_step".into(),
                 format!("{dt}: expected a step > 0 and <= the duration (s)"),

@@ -11,7 +11,7 @@ use proptest::prelude::*;
 use structure::ground::{RecordFormat, Units};
 use structure::scene::{ContactLaw, ImpulseVariant, Integrator, MAX_STORIES};
 use structure::testing::paper_scene_path;
-use structure::{Damping, Scene, SceneError, G};
+use structure::{Damping, Purpose, Scene, SceneError, G};
 
 fn fixture(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -521,6 +521,33 @@ fn missing_fields_name_the_field() {
     err_has(load_str(&no_gap, &[]), &["test.toml", "`gap`"]);
     let no_file = format!("{TINY}\n[ground_motion]\npga = 0.3\n");
     err_has(load_str(&no_file, &[]), &["test.toml", "`file`"]);
+}
+
+#[test]
+fn a_scene_read_for_its_structure_needs_no_duration() {
+    // `pound modes` reads a scene for its structure alone: neither a record nor
+    // `analysis.duration` is needed, and the scene says it cannot be analysed (duration 0).
+    let text = "[[buildings]]\nname = \"a\"\nmasses = [1.0, 1.0]\nstory_stiffness = [4.0, 4.0]\n\
+                [gap_element]\ntime_step = 0.5\n";
+    let o: Vec<String> = Vec::new();
+    let s = Scene::from_str_for(text, "test.toml", &fixtures_dir(), &o, Purpose::Structure)
+        .expect("a structure needs no duration");
+    assert_eq!(s.duration, 0.0);
+    assert!(s.ground.is_none());
+    assert_eq!(s.buildings[0].masses, vec![1.0, 1.0]);
+    // For an analysis the same text is refused, naming the key.
+    err_has(load_str(text, &[]), &["analysis.duration", "missing"]);
+    // A duration that is given is still checked, and bounds the step.
+    for (bad, expect) in [
+        ("[analysis]\nduration = -1.0\n", "analysis.duration"),
+        ("[analysis]\nduration = 0.25\n", "gap_element.time_step"),
+    ] {
+        let t = format!("{text}{bad}");
+        err_has(
+            Scene::from_str_for(&t, "test.toml", &fixtures_dir(), &o, Purpose::Structure),
+            &[expect],
+        );
+    }
 }
 
 #[test]

@@ -330,7 +330,9 @@ fn load_scene(path: &Path, set: &[String]) -> Result<Scene> {
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Modes { scene, set, json } => {
-            let scene = load_scene(&scene, &set)?;
+            // The structure alone: a scene without a record or a duration is fine here.
+            let scene =
+                Scene::from_file_for(&scene, &set, structure::Purpose::Structure).map_err(input)?;
             if json {
                 println!(
                     "{}",

@@ -576,10 +576,6 @@ fn scene_missing_fields() {
             &["missing field `file`"],
         ),
         (
-            format!("{BUILDINGS}{CONTACT}"),
-            &["analysis.duration", "missing"],
-        ),
-        (
             "name = \"nothing\"\n".to_string(),
             &["missing field `buildings`"],
         ),
@@ -587,6 +583,28 @@ fn scene_missing_fields() {
     for (text, expect) in &cases {
         scene_case(text, &[], expect);
     }
+    // Neither a record nor a duration: an analysis (run, export) is refused naming the key;
+    // `pound modes` reads the structure alone and answers.
+    let d = TempDir::new("scene-no-duration");
+    let scene = d.write("scene.toml", &format!("{BUILDINGS}{CONTACT}"));
+    let (json, hist) = (d.path("out.json"), d.path("history.csv"));
+    let parts = ["scene.toml", "analysis.duration", "missing"];
+    assert_bad(
+        &run_args(&scene, &json, &hist, &[]),
+        &parts,
+        &[&json, &hist],
+    );
+    assert_bad(
+        &["export".to_string(), "opensees".into(), s(&scene)],
+        &parts,
+        &[],
+    );
+    let out = pound(&["modes".into(), s(&scene)]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
 }
 
 #[test]

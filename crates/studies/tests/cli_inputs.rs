@@ -259,3 +259,38 @@ fn directories_and_os_errors() {
     assert_eq!(o.status.code(), Some(1), "{err}");
     assert_eq!(err.matches("os error").count(), 1, "{err}");
 }
+
+#[test]
+fn modes_of_a_structure_alone() {
+    // `pound modes` needs neither a record nor a duration (it used to refuse
+    // `analysis.duration: missing`); `pound run` of the same scene still needs one.
+    // Uniform shear building, n = 3, m = 1e5 kg, k = 1e8 N/m:
+    // ω_j = 2 √(k/m) sin((2j − 1)π / (2(2n + 1))).
+    let d = TempDir::new("modes-alone");
+    let f = d.write(
+        "s.toml",
+        "[[buildings]]\nname = \"A\"\nstories = 3\nmass = 1e5\nstory_stiffness = 1e8\n",
+    );
+    let f = f.to_str().unwrap();
+    let o = pound(&["modes", f, "--json"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let text = v.to_string();
+    for j in 1..=3 {
+        let w =
+            2.0 * (1e8_f64 / 1e5).sqrt() * ((2 * j - 1) as f64 * std::f64::consts::PI / 14.0).sin();
+        let hz = w / (2.0 * std::f64::consts::PI);
+        let found = v["buildings"][0]["frequencies_hz"][j - 1]
+            .as_f64()
+            .unwrap_or_else(|| panic!("no frequency_hz of mode {j} in {text}"));
+        assert!(
+            (found / hz - 1.0).abs() < 1e-12,
+            "mode {j}: {found} vs {hz}"
+        );
+    }
+    refused(
+        &["run", f, "--method", "momentum"],
+        &["s.toml", "analysis.duration", "missing"],
+    );
+}
