@@ -139,11 +139,20 @@ enum StudiesCommand {
         studies_dir: PathBuf,
         /// Run the record-based studies (stiffness, modes, restitution, gap, modelform,
         /// yielding, yielding-strong, robustness) on these records instead of their
-        /// definitions' (PEER AT2, or two-column time/acceleration in g). Naming a study with
+        /// definitions' (PEER AT2 for *.at2 files, else two-column time/acceleration; see
+        /// --record-format). Naming a study with
         /// one fixed scene (paper, cost, stability) with --records is an error; with --all
         /// those run their own record.
         #[arg(long, num_args = 1..)]
         records: Vec<PathBuf>,
+        /// Format of every --records file: at2, two-column (time, acceleration) or one-column
+        /// (acceleration only; needs --record-dt). Default: at2 for *.at2 files, two-column
+        /// otherwise. Units need no option: every study scales each record to its PGA levels.
+        #[arg(long, value_enum, requires = "records")]
+        record_format: Option<FormatArg>,
+        /// Time step of one-column --records (s).
+        #[arg(long, requires = "records")]
+        record_dt: Option<f64>,
         /// Run one part of the sweep: cases with index % n == i - 1.
         #[arg(long, value_name = "i/n")]
         shard: Option<String>,
@@ -260,6 +269,41 @@ fn gap_law_notes(scene: &structure::Scene) -> Vec<String> {
 
 fn input<E: std::fmt::Display>(e: E) -> anyhow::Error {
     anyhow::Error::new(InputError(e.to_string()))
+}
+
+/// The scene overrides that read `studies run --records` files as `--record-format` and
+/// `--record-dt` say (none without them: the format follows each file's extension).
+fn record_overrides(format: Option<FormatArg>, dt: Option<f64>) -> Result<Vec<String>> {
+    if let Some(dt) = dt {
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(input(format!(
+                "--record-dt {dt}: expected a time step > 0 (s)"
+            )));
+        }
+        if !matches!(format, Some(FormatArg::OneColumn)) {
+            return Err(input(format!(
+                "--record-dt {dt}: only a one-column record needs a time step (give --record-format one-column); AT2 records state theirs on line 4, two-column records take it from the time column"
+            )));
+        }
+    }
+    let name = match format {
+        None => return Ok(Vec::new()),
+        Some(FormatArg::At2) => "at2",
+        Some(FormatArg::TwoColumn) => "two-column",
+        Some(FormatArg::OneColumn) => {
+            if dt.is_none() {
+                return Err(input(
+                    "--record-format one-column: give the records' time step with --record-dt (s)",
+                ));
+            }
+            "one-column"
+        }
+    };
+    let mut set = vec![format!("ground_motion.format=\"{name}\"")];
+    if let Some(dt) = dt {
+        set.push(format!("ground_motion.dt={dt:?}"));
+    }
+    Ok(set)
 }
 
 fn load_record(a: &RecordArgs) -> Result<GroundMotion> {
@@ -522,6 +566,8 @@ fn studies_command(command: StudiesCommand) -> Result<()> {
             out,
             studies_dir,
             records,
+            record_format,
+            record_dt,
             shard,
             threads,
             quick,
@@ -609,6 +655,7 @@ fn studies_command(command: StudiesCommand) -> Result<()> {
                 }
                 recs.push(std::path::absolute(r)?.display().to_string());
             }
+            let record_set = record_overrides(record_format, record_dt)?;
             if !studies_dir.is_dir() {
                 return Err(input(format!(
                     "--studies-dir {}: not a folder (expected the folder holding the study definitions, <name>.toml)",
@@ -623,6 +670,7 @@ fn studies_command(command: StudiesCommand) -> Result<()> {
                 opts: st::StudyOptions {
                     quick,
                     records: recs,
+                    record_set,
                 },
                 progress: true,
                 fresh,

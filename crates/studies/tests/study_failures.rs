@@ -218,3 +218,122 @@ fn study_scene_with_contact_elsewhere_is_refused() {
     assert!(err.contains("joins buildings 1 and 3"), "{err}");
     assert!(!out.join("gap/summary.md").exists());
 }
+
+/// `--record-format` / `--record-dt` read `--records` files that are not AT2 or two-column:
+/// the same samples as one column (with its dt) and as two columns (time, acceleration)
+/// give the same peaks; a one-column file without them is refused before the sweep, and so
+/// are options that do not fit together.
+#[test]
+fn record_format_of_user_records() {
+    let d = TempDir::new("recformat");
+    let (mut one, mut two) = (String::new(), String::new());
+    for i in 0..1400 {
+        let t = i as f64 * 0.01;
+        let a = 0.3 * (2.0 * std::f64::consts::PI * 1.5 * t).sin() * (-0.1 * t).exp();
+        one.push_str(&format!("{a:.6}\n"));
+        two.push_str(&format!("{t:.2} {a:.6}\n"));
+    }
+    let one = d.write("one.txt", &one);
+    let two = d.write("two.dat", &two);
+    let studies = studies_dir();
+    let run = |out: &str, rec: &std::path::Path, extra: &[&str]| {
+        let out = d.path(out);
+        let mut a: Vec<String> = [
+            "studies",
+            "run",
+            "modes",
+            "--quick",
+            "--studies-dir",
+            &studies,
+            "--out",
+            out.to_str().unwrap(),
+            "--records",
+            rec.to_str().unwrap(),
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+        a.extend(extra.iter().map(|s| s.to_string()));
+        (pound(&a), out)
+    };
+    let (o1, out1) = run(
+        "one",
+        &one,
+        &["--record-format", "one-column", "--record-dt", "0.01"],
+    );
+    assert!(
+        o1.status.success(),
+        "{}",
+        String::from_utf8_lossy(&o1.stderr)
+    );
+    let (o2, out2) = run("two", &two, &[]);
+    assert!(
+        o2.status.success(),
+        "{}",
+        String::from_utf8_lossy(&o2.stderr)
+    );
+    // Peaks row by row without the case id (the record options are part of it). Not bit
+    // for bit: one column times the samples as i·dt, two columns parse "0.07"; the peaks
+    // agree to round-off.
+    let peaks = |out: &std::path::Path| -> Vec<Vec<String>> {
+        std::fs::read_to_string(out.join("modes/peaks.csv"))
+            .unwrap()
+            .lines()
+            .map(|l| l.split(',').skip(1).map(str::to_string).collect())
+            .collect()
+    };
+    let (p1, p2) = (peaks(&out1), peaks(&out2));
+    assert_eq!(p1.len(), p2.len());
+    let mut numbers = 0;
+    for (a, b) in p1.iter().zip(&p2) {
+        assert_eq!(a.len(), b.len());
+        for (x, y) in a.iter().zip(b) {
+            match (x.parse::<f64>(), y.parse::<f64>()) {
+                (Ok(x), Ok(y)) => {
+                    numbers += 1;
+                    assert!((x - y).abs() <= 1e-9 * x.abs().max(y.abs()), "{x} vs {y}");
+                }
+                _ => assert_eq!(x, y),
+            }
+        }
+    }
+    assert!(numbers > 100, "{numbers} numbers compared");
+    // The options are kept in the manifest, so a merge rebuilds the same case list.
+    let manifest = std::fs::read_to_string(out1.join("modes/manifest.json")).unwrap();
+    assert!(manifest.contains("one-column"), "{manifest}");
+
+    for (rec, extra, expect) in [
+        (
+            &one,
+            &[][..],
+            &["one.txt line 1", "expected 2 values per line"][..],
+        ),
+        (
+            &one,
+            &["--record-format", "one-column"][..],
+            &["--record-dt"][..],
+        ),
+        (
+            &two,
+            &["--record-dt", "0.01"][..],
+            &["--record-dt 0.01", "one-column"][..],
+        ),
+        (
+            &one,
+            &["--record-format", "one-column", "--record-dt", "0"][..],
+            &["--record-dt 0", "> 0"][..],
+        ),
+    ] {
+        let (o, out) = run("bad", rec, extra);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{extra:?}: {err}");
+        for e in expect {
+            assert!(err.contains(e), "{extra:?}: {e:?} not in {err}");
+        }
+        assert!(!out.exists(), "{extra:?}: nothing written");
+    }
+    // Without --records the record options are a usage error.
+    let o = pound(&["studies", "run", "modes", "--record-format", "at2"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--records"));
+}

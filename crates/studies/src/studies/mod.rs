@@ -74,6 +74,11 @@ pub struct StudyOptions {
     pub quick: bool,
     /// Records replacing the definition's (studies 2–5); absolute paths.
     pub records: Vec<String>,
+    /// `PATH=VALUE` scene overrides for every case on one of `records` (how to read them:
+    /// `ground_motion.format`, `ground_motion.dt`); empty: each file's format follows its
+    /// extension.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub record_set: Vec<String>,
 }
 
 /// What a study sees.
@@ -117,6 +122,13 @@ impl Ctx {
         let mut c = CaseSpec::new(scene, method)
             .record(record, Some(pga))
             .param("record", record_label(record));
+        if self.opts.records.iter().any(|r| r == record) {
+            for s in &self.opts.record_set {
+                if let Some((path, value)) = s.split_once('=') {
+                    c = c.with(path, value);
+                }
+            }
+        }
         if self.opts.quick {
             c = c.with("analysis.duration", "12.0");
         }
