@@ -3,13 +3,14 @@
 #   make test      run the whole test suite
 #   make robustness  the long robustness sweep over every record (results/robustness)
 #   make yielding-strong  the yielding study of a stronger pair (results/yielding-strong)
+#   make opensees  the cross-checks against OpenSees (installs OpenSeesPy in target/; not in CI)
 # Nothing else is needed on a fresh machine than a Rust toolchain (cargo): plots use a font
 # committed in data/fonts, so no system font or fontconfig package is required.
 
 CARGO ?= cargo
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 
-.PHONY: all build test studies robustness yielding-strong bench fmt clippy clean
+.PHONY: all build test studies robustness yielding-strong opensees bench fmt clippy clean
 
 all: build
 
@@ -30,6 +31,19 @@ robustness: build
 # 0.15 g (studies/yielding-strong.toml): the pair pounds before it yields. Not in CI.
 yielding-strong: build
 	./target/release/pound studies run yielding-strong --fresh --out results
+
+# The cross-checks against OpenSees (docs/cli.md): OpenSeesPy in a virtual environment under
+# target/ (its Linux library needs Debian's libblas3 and liblapack3, installed if missing),
+# then the three opt-in tests that run the exported scripts. Needs the network; not in CI.
+OPENSEES_VERSION ?= 3.7.1.2
+OPENSEES_VENV := target/opensees-venv
+opensees: build
+	@if command -v dpkg >/dev/null && ! dpkg -s libblas3 liblapack3 >/dev/null 2>&1; then \
+		$(if $(filter 0,$(shell id -u)),,sudo) sh -c "apt-get update -qq && apt-get install -y -qq libblas3 liblapack3"; fi
+	test -x $(OPENSEES_VENV)/bin/python3 || python3 -m venv $(OPENSEES_VENV)
+	$(OPENSEES_VENV)/bin/pip install -q openseespy==$(OPENSEES_VERSION)
+	PATH="$(abspath $(OPENSEES_VENV))/bin:$$PATH" $(CARGO) test --release -p studies \
+		--test export --test wall_cli --test yield_opensees -- --ignored
 
 bench:
 	$(CARGO) bench -p solvers
