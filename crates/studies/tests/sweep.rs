@@ -37,6 +37,7 @@ fn cfg(out: &Path, threads: usize, shard: Option<Shard>) -> RunConfig {
         opts: StudyOptions {
             quick: true,
             records: vec![],
+            ..Default::default()
         },
         progress: false,
         fresh: false,

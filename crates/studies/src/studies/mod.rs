@@ -826,6 +826,7 @@ mod tests {
         let opts = StudyOptions {
             quick: true,
             records: vec![rec.clone()],
+            ..Default::default()
         };
         let cfg = RunConfig {
             out: std::env::temp_dir().join("pound-take-records"),
