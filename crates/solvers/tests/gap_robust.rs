@@ -103,6 +103,8 @@ fn gap_restitution_is_in_the_unit_interval_or_null_with_a_reason() {
 /// 7.000000000000001 in floating point).
 #[test]
 fn newmark_step_count_ignores_decimal_round_off() {
+    // The precondition, checked by the compiler in floating point: the quotient is above 7.
+    #[allow(clippy::assertions_on_constants)]
     const _: () = assert!(0.035 / 0.005 > 7.0, "the case exercises the round-off");
     let s = paper(&[
         "gap_element.integrator=newmark",
