@@ -62,9 +62,12 @@ fn momentum_is_the_stiff_limit_of_the_gap_element_with_contact_at_every_floor() 
         };
         let (e12, e14) = (e("1e12"), e("1e14"));
         eprintln!("gap {gap} m: struck contacts {struck:?}; gap element vs momentum: k=1e12 {e12:.3e}, k=1e14 {e14:.3e}");
+        // k^-1/2 over two decades is a factor 10; [4, 25] accepts slopes 0.3–0.7 and
+        // refuses k^-1 (100) and no convergence (1). Measured 8.1 and 13.6.
+        let ratio = e12 / e14;
         assert!(
-            e14 <= 0.25 * e12,
-            "{gap}: {e12:.3e} -> {e14:.3e}, not the k^-1/2 rate"
+            (4.0..=25.0).contains(&ratio),
+            "{gap}: {e12:.3e} -> {e14:.3e} (÷{ratio:.1}), not the k^-1/2 rate"
         );
     }
 }

@@ -36,11 +36,15 @@ fn energy_balance_closes_on_a_damped_scene_with_ground_motion_and_impacts() {
             out.impacts.iter().take(4).map(|i| (i.achieved_restitution * 1e4).round() / 1e4).collect::<Vec<_>>()
         );
         assert!(out.impacts.len() >= 2);
-        assert!(rel < 1e-6, "{law}: relative balance error {rel:e}");
+        // The balance's terms are integrated with the motion, so it closes to the error
+        // control: 10 × rtol (measured 3–4e-11 at rtol 1e-10).
+        assert!(rel < 1e-9, "{law}: relative balance error {rel:e}");
         assert!(e.damping > 0.0 && e.input.abs() > 0.0);
         if law == "linear" {
+            // Stored and returned exactly by the conservative spring: what is left is the
+            // integration error of its work, within 10 × rtol.
             assert!(
-                e.contact.abs() < 1e-6 * e.input.abs(),
+                e.contact.abs() < 1e-9 * e.input.abs(),
                 "linear law dissipates nothing: {}",
                 e.contact
             );
@@ -56,7 +60,9 @@ fn energy_balance_closes_on_a_damped_scene_with_ground_motion_and_impacts() {
 
 #[test]
 fn newmark_energy_audit_is_consistent_on_smooth_contacts() {
-    // With many steps per contact the Newmark audit closes to a small fraction.
+    // The Newmark audit sums the trapezoidal works that the average-acceleration scheme
+    // conserves exactly, so it closes to round-off: 16 ε per step (measured 1.2e-13 over
+    // 20 000 steps).
     let s = paper(&[
         "contacts.0.gap=0.05",
         "gap_element.integrator=newmark",
@@ -70,7 +76,9 @@ fn newmark_energy_audit_is_consistent_on_smooth_contacts() {
         "newmark k=1e9 dt=1e-3: balance rel {rel:.2e}, {} impacts",
         out.impacts.len()
     );
-    assert!(rel < 1e-3, "{rel}");
+    let bound = 16.0 * out.stats.steps as f64 * f64::EPSILON;
+    assert!(out.stats.steps >= 20_000);
+    assert!(rel < bound, "{rel} >= {bound}");
 }
 
 #[test]

@@ -36,11 +36,22 @@ fn paper_scene_runs_for_gaps_10_and_5_cm_and_k_1e7_to_1e13() {
                 "the paper scene pounds at gap {gap}"
             );
             for imp in &out.impacts {
-                // Linear law: elastic. Each episode rebounds with the approach speed up to
-                // the structure's own motion during the contact.
-                assert!(imp.duration.unwrap() >= 0.0 && imp.peak_force.unwrap() >= 0.0);
+                assert!(imp.duration.unwrap() > 0.0 && imp.peak_force.unwrap() > 0.0);
             }
-            assert!(out.energy.balance_error.abs() < 1e-4 * out.energy.input.abs());
+            // Linear law: elastic, the spring returns what it stored, so the contact work
+            // and the balance close to the error control (default rtol 1e-8): 10 × rtol
+            // (measured balance up to 1.5e-8).
+            let input = out.energy.input.abs();
+            assert!(
+                out.energy.contact.abs() < 1e-7 * input,
+                "gap={gap} k={k}: contact work {:e} of input {input:e}",
+                out.energy.contact
+            );
+            assert!(
+                out.energy.balance_error.abs() < 1e-7 * input,
+                "gap={gap} k={k}: balance {:e} of input {input:e}",
+                out.energy.balance_error
+            );
         }
     }
 }

@@ -305,7 +305,8 @@ fn a_floor_pushed_against_a_wall_is_held_until_the_force_turns_tensile() {
         if t > held[0].start + 1e-3 && t < 0.3 {
             let lam = M * 6.0 - K * GAP;
             let f = hist.contact_force[k][0];
-            assert!((f - lam).abs() <= 1e-6 * lam, "t = {t}: {f} vs {lam}");
+            // λ is computed from the held state's closed form: round-off (passes at 1e-12).
+            assert!((f - lam).abs() <= 1e-10 * lam, "t = {t}: {f} vs {lam}");
         }
     }
     assert!(
@@ -326,17 +327,18 @@ fn two_free_masses_rebound_by_stereomechanics() {
     let out = impulse::solve(&scene, Some(&mut hist)).unwrap();
     assert_eq!(out.impacts.len(), 1);
     let v = hist.velocity.last().unwrap();
-    assert!((v[0] + 0.22).abs() < 1e-9, "v1' = {}", v[0]);
-    assert!((v[1] - 0.30).abs() < 1e-9, "v2' = {}", v[1]);
+    // Algebraic formulas: round-off, 1e-12 (as the momentum method's test).
+    assert!((v[0] + 0.22).abs() < 1e-12, "v1' = {}", v[0]);
+    assert!((v[1] - 0.30).abs() < 1e-12, "v2' = {}", v[1]);
     assert!(
-        (out.energy.contact - 201_600.0).abs() < 1e-6 * 201_600.0,
+        (out.energy.contact - 201_600.0).abs() < 1e-12 * 201_600.0,
         "ΔE = {}",
         out.energy.contact
     );
     let im = &out.impacts[0];
     assert!((im.achieved_restitution - e).abs() < 1e-12);
     let p = (1.0 + e) * 0.8 * m1 * m2 / (m1 + m2);
-    assert!((im.impulse - p).abs() < 1e-9 * p, "{im:?}");
+    assert!((im.impulse - p).abs() < 1e-12 * p, "{im:?}");
     // Momentum m1 v1 + m2 v2 = 0.28e6 N·s is conserved.
     assert!((m1 * v[0] + m2 * v[1] - 0.28e6).abs() < 1e-9 * 0.28e6);
 }
@@ -414,8 +416,8 @@ fn chattering_ends_in_persistent_contact_as_in_the_momentum_method() {
     assert_eq!(mom.impacts.len(), imp.impacts.len());
     assert_eq!(mom.persistent_contacts.len(), imp.persistent_contacts.len());
     // Under a constant push the holding force is nearly constant, so the momentum method's
-    // constant force per step is nearly exact (measured 5e-10).
-    assert!(peak_diff(&mom, &imp) < 1e-6);
+    // constant force per step is nearly exact (measured 5e-10; passes at 1e-9).
+    assert!(peak_diff(&mom, &imp) < 1e-8);
     let last = imp.persistent_contacts.last().unwrap();
     assert_eq!(last.released_by, "end of analysis");
     let e = &imp.energy;

@@ -130,8 +130,10 @@ fn equals_fine_step_rk4_of_the_full_model() {
                 worst = worst.max((row[off + i] - r[i]).abs());
             }
         }
+        // RK4 at h = 1e-4 s: its global error, of order (ωh)⁴ for the modes that matter, is
+        // about 1e-10 of the peak here (the test passes at 1e-10); 1e-8 leaves a margin.
         assert!(
-            worst < 1e-6 * scale,
+            worst < 1e-8 * scale,
             "building {b}: max diff {worst:e} vs peak {scale:e}"
         );
         // Continuous peaks against the peaks over every RK4 step (1e-4 s apart: their own
@@ -143,8 +145,9 @@ fn equals_fine_step_rk4_of_the_full_model() {
                 (r.story_shear_max[i], reference.shear_max[i]),
             ] {
                 let rel = (cont - refp) / cont;
+                // Below: only RK4's own error (measured rel ≥ +1.4e-11); above: its sampling.
                 assert!(
-                    (-1e-6..1e-5).contains(&rel),
+                    (-1e-9..1e-5).contains(&rel),
                     "building {b} floor/story {i}: continuous {cont:e}, RK4 {refp:e} ({rel:e})"
                 );
             }

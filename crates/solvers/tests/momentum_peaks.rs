@@ -37,7 +37,9 @@ fn peaks_do_not_move_when_the_record_is_resampled_16_times_finer() {
         assert_eq!(a.impacts.len(), b.impacts.len(), "{over:?}");
         let d = peak_difference(&a, &b);
         eprintln!("{over:?}: {d:.2e}");
-        assert!(d < 1e-6, "{over:?}: peaks differ by {d:.2e}");
+        // Exact method, instants located to ~2ε·t: round-off only (measured up to 3.1e-13;
+        // issue 10 asked for 1e-6 or better).
+        assert!(d < 1e-11, "{over:?}: peaks differ by {d:.2e}");
     }
 }
 
@@ -79,7 +81,8 @@ fn gap_element_peaks_do_not_move_with_a_finer_record_beyond_its_tolerance() {
         assert_eq!(a.impacts.len(), b.impacts.len());
         let d = peak_difference(&a, &b);
         eprintln!("gap element, {gap} m: {d:.2e}");
-        assert!(d < 1e-6, "gap {gap}: peaks differ by {d:.2e}");
+        // Within 10 × rtol (measured 2.5e-10).
+        assert!(d < 1e-9, "gap {gap}: peaks differ by {d:.2e}");
     }
 }
 

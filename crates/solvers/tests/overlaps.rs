@@ -43,10 +43,16 @@ fn momentum_overlap_maxima_are_continuous() {
             assert_eq!((x.gap, x.contact), (gap, 0));
             // Relative to the relative displacement u_left − u_right at the maximum.
             let (rx, ry) = (x.max_overlap + gap, y.max_overlap + gap);
+            // Round-off only (both pass at 1e-12): 1e-11 relative, 1e-9 s for the instant
+            // (a flat maximum's instant is less well defined than its value).
             let d = (rx - ry).abs() / ry.abs();
-            assert!(d < 1e-6, "{over:?} floor {}: {rx} vs {ry} ({d:.2e})", k + 1);
             assert!(
-                (x.time - y.time).abs() < 1e-6,
+                d < 1e-11,
+                "{over:?} floor {}: {rx} vs {ry} ({d:.2e})",
+                k + 1
+            );
+            assert!(
+                (x.time - y.time).abs() < 1e-9,
                 "{over:?}: {} vs {}",
                 x.time,
                 y.time
@@ -97,7 +103,8 @@ fn paper_scene_roof_only_overlaps_at_mid_height_and_the_gap_element_converges_to
     let worst = solvers::overlap::worst(&m.overlaps).unwrap();
     assert!(worst.left_floor > lo && worst.left_floor < hi, "{worst:?}");
     // The gap element: its overlaps approach the momentum method's as k^-1/2 (a factor 10
-    // from k = 1e12 to 1e14); allow 2.5× the predicted remainder.
+    // from k = 1e12 to 1e14); the band [4, 25] accepts slopes 0.3–0.7 and refuses k^-1
+    // (measured 12.6).
     let run = |k: &str| -> RunOutput {
         gap::solve(&paper(&[&format!("gap_element.stiffness={k}")]), None).unwrap()
     };
@@ -113,7 +120,11 @@ fn paper_scene_roof_only_overlaps_at_mid_height_and_the_gap_element_converges_to
     let e12_max = e12.iter().cloned().fold(0.0, f64::max);
     let e14_max = e14.iter().cloned().fold(0.0, f64::max);
     eprintln!("gap element vs momentum, largest overlap difference: k=1e12 {e12_max:.3e} m, 1e14 {e14_max:.3e} m");
-    assert!(e14_max <= 0.25 * e12_max, "{e12:?} {e14:?}");
+    let ratio = e12_max / e14_max;
+    assert!(
+        (4.0..=25.0).contains(&ratio),
+        "÷{ratio:.1}: {e12:?} {e14:?}"
+    );
     // Same floors beyond the gap, same worst floor.
     let pos = |r: &RunOutput| -> Vec<usize> {
         r.overlaps
@@ -127,8 +138,9 @@ fn paper_scene_roof_only_overlaps_at_mid_height_and_the_gap_element_converges_to
         solvers::overlap::worst(&g14.overlaps).unwrap().left_floor,
         worst.left_floor
     );
-    // Newmark reports the maximum over its steps: not above the continuous one by more than
-    // its own discretisation error, and the same floors.
+    // Newmark reports the maximum over its steps, with its own discretisation error: the
+    // same floors, and overlaps within 1 mm of the adaptive element's at the same k
+    // (measured up to 0.23 mm at Δt = 1 ms; overlaps of up to a few cm).
     let nm = gap::solve(
         &paper(&[
             "gap_element.stiffness=1e12",
@@ -140,6 +152,16 @@ fn paper_scene_roof_only_overlaps_at_mid_height_and_the_gap_element_converges_to
     .unwrap();
     assert_eq!(floor_pairs(&nm.overlaps), floor_pairs(&m.overlaps));
     assert_eq!(pos(&nm), positive);
+    for (a, b) in nm.overlaps.iter().zip(&g12.overlaps) {
+        let d = (a.max_overlap - b.max_overlap).abs();
+        assert!(
+            d < 1e-3,
+            "floor {}: Newmark {} vs adaptive {}",
+            a.left_floor,
+            a.max_overlap,
+            b.max_overlap
+        );
+    }
 }
 
 #[test]

@@ -45,8 +45,10 @@ fn adaptive_balance_closes_with_hysteresis() {
         .map(|b| b.hysteretic_energy.unwrap())
         .sum();
     assert!((per_building - e.hysteretic).abs() <= 1e-12 * e.hysteretic);
+    // Integrated with the motion, so closed to the error control: 20 × rtol (measured
+    // 4.0e-10 at rtol 1e-10; the yield kinks are located events).
     let rel = e.balance_error.abs() / e.input;
-    assert!(rel < 1e-6, "relative balance error {rel:e}");
+    assert!(rel < 2e-9, "relative balance error {rel:e}");
 }
 
 #[test]

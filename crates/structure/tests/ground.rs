@@ -769,10 +769,12 @@ fn cap000_spectrum() {
     // Spot check against a fine RK4 on the real record.
     let omega = 2.0 * std::f64::consts::PI;
     assert!(rel(p.sd, rk4_sd(&gm, omega, 0.05, 20)) < 1e-7);
-    // Very short period: PSA → PGA.
+    // Very short period: PSA → PGA, with a relative error of order (f_record / f)² for the
+    // record's frequencies f_record ≲ 25 Hz against f = 200 Hz, at most about 1.6 %
+    // (measured below 0.1 %).
     let short = response_spectrum(&gm, &[0.005], 0.05)[0];
     assert!(
-        rel(short.psa, gm.pga()) < 0.05,
+        rel(short.psa, gm.pga()) < 0.016,
         "{} vs {}",
         short.psa,
         gm.pga()
