@@ -23,7 +23,7 @@ test:
 studies: build
 	./target/release/pound studies run --all --fresh --out results
 
-# The long robustness sweep (issue 9): 60 records x 4 gaps x 3 c_r x 4 solvers. Not in CI.
+# The long robustness sweep: 60 records x 4 gaps x 3 c_r x 4 solvers. Not in CI.
 robustness: build
 	./target/release/pound studies run robustness --fresh --out results
 

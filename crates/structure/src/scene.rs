@@ -1266,9 +1266,18 @@ fn validate(
                 ));
             }
             if !path.is_file() {
+                let relative = if Path::new(&g.file).is_relative() {
+                    format!(
+                        " (`{}` is taken relative to the scene's folder, {})",
+                        g.file,
+                        base_dir.display()
+                    )
+                } else {
+                    String::new()
+                };
                 return Err(invalid(
                     key("file"),
-                    format!("record file {} does not exist", path.display()),
+                    format!("record file {} does not exist{relative}", path.display()),
                 ));
             }
             let rec = GroundMotion::load(&path, &format).map_err(|source| SceneError::Record {

@@ -283,7 +283,10 @@ import os
 import sys
 import time
 
-import openseespy.opensees as ops
+try:
+    import openseespy.opensees as ops
+except ImportError as e:
+    sys.exit(f"this script needs OpenSeesPy: pip install openseespy (or make opensees in pound's repository): {{e}}")
 
 SCENE = {name_lit}
 G = {g}  # m/s^2

@@ -13,11 +13,21 @@ pub enum OutputError {
     /// The OS error is part of the message, not a chained source (printed once).
     #[error("cannot write {path}: {error}")]
     Io { path: String, error: std::io::Error },
+    /// A component of the destination's folder is a file.
+    #[error("cannot write {path}: {file} is a file, not a folder")]
+    NotAFolder { path: String, file: String },
     #[error("cannot serialise {what}: {source}")]
     Json {
         what: String,
         source: serde_json::Error,
     },
+}
+
+/// The nearest existing ancestor of `dir` (itself included) if it is not a folder: the
+/// reason a file cannot be created below it.
+fn file_in_the_way(dir: &Path) -> Option<&Path> {
+    let existing = dir.ancestors().find(|a| a.exists())?;
+    (!existing.is_dir()).then_some(existing)
 }
 
 /// Writes `bytes` to `path` atomically (temporary file in the same folder, then rename).
@@ -68,7 +78,13 @@ pub fn write_all_atomic(files: &[(&Path, &[u8])]) -> Result<(), OutputError> {
         if let Err(e) = result {
             let _ = std::fs::remove_file(&tmp);
             cleanup(&staged);
-            return Err(err(e));
+            return Err(match file_in_the_way(&dir) {
+                Some(file) => OutputError::NotAFolder {
+                    path: path.display().to_string(),
+                    file: file.display().to_string(),
+                },
+                None => err(e),
+            });
         }
         staged.push((tmp, path));
     }

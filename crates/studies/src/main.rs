@@ -53,13 +53,13 @@ enum Command {
         #[command(flatten)]
         record: RecordArgs,
         /// Damping ratio (dimensionless).
-        #[arg(long, default_value_t = 0.05)]
+        #[arg(long, default_value_t = 0.05, allow_negative_numbers = true)]
         damping: f64,
         /// Scale the record to this peak ground acceleration first (g).
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         pga: Option<f64>,
         /// Comma-separated periods (s); default: 100 log-spaced periods from 0.02 to 10 s.
-        #[arg(long, value_delimiter = ',')]
+        #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
         periods: Option<Vec<f64>>,
         /// Write CSV here (columns period_s,sd_m,psv_m_per_s,psa_g) instead of stdout.
         #[arg(long)]
@@ -151,7 +151,7 @@ enum StudiesCommand {
         #[arg(long, value_enum, requires = "records")]
         record_format: Option<FormatArg>,
         /// Time step of one-column --records (s).
-        #[arg(long, requires = "records")]
+        #[arg(long, requires = "records", allow_negative_numbers = true)]
         record_dt: Option<f64>,
         /// Run one part of the sweep: cases with index % n == i - 1.
         #[arg(long, value_name = "i/n")]
@@ -191,7 +191,7 @@ struct RecordArgs {
     #[arg(long, value_enum)]
     format: Option<FormatArg>,
     /// Time step of a one-column record (s).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     dt: Option<f64>,
     /// Units of a two- or one-column record: g (default), m/s^2 or cm/s^2. An AT2 record
     /// states its own units on header line 3; --units must agree with them.
@@ -306,6 +306,17 @@ fn record_overrides(format: Option<FormatArg>, dt: Option<f64>) -> Result<Vec<St
     Ok(set)
 }
 
+/// Warns (stderr) when a record's PGA is above [`PLAUSIBLE_PGA_G`]: almost surely read in the
+/// wrong units; `what` names the setting to check.
+fn implausible_pga(g: &GroundMotion, what: &str) {
+    let pga = g.pga() / structure::G;
+    if pga > PLAUSIBLE_PGA_G {
+        eprintln!(
+            "warning: the ground motion's PGA is {pga:.3} g, above {PLAUSIBLE_PGA_G} g, more than any recorded earthquake: check the record's units ({what})"
+        );
+    }
+}
+
 fn load_record(a: &RecordArgs) -> Result<GroundMotion> {
     let units: Option<Units> = match &a.units {
         None => None,
@@ -388,6 +399,7 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::Record { record, json } => {
             let gm = load_record(&record)?;
+            implausible_pga(&gm, "--units");
             if json {
                 println!(
                     "{}",
@@ -410,6 +422,9 @@ fn run(cli: Cli) -> Result<()> {
                 )));
             }
             let mut gm = load_record(&record)?;
+            if pga.is_none() {
+                implausible_pga(&gm, "--units");
+            }
             if let Some(p) = pga {
                 if !(p.is_finite() && p > 0.0) {
                     return Err(input(format!(
@@ -471,12 +486,7 @@ fn run(cli: Cli) -> Result<()> {
                 }
             }
             if let Some(g) = &scene.ground {
-                let pga = g.pga() / structure::G;
-                if pga > PLAUSIBLE_PGA_G {
-                    eprintln!(
-                        "warning: the ground motion's PGA is {pga:.3} g, above {PLAUSIBLE_PGA_G} g, more than any recorded earthquake: check the record's units (ground_motion.units) and ground_motion.scale"
-                    );
-                }
+                implausible_pga(g, "ground_motion.units and ground_motion.scale");
             }
             if let (Method::Momentum, Some(n)) = (method, scene.momentum.modes) {
                 for b in scene.buildings.iter().filter(|b| b.n_floors() < n) {
@@ -530,6 +540,11 @@ fn run(cli: Cli) -> Result<()> {
                 .map(|(p, b)| (p.as_path(), b.as_slice()))
                 .collect();
             io::write_all_atomic(&refs)?;
+            if !files.is_empty() {
+                let names: Vec<String> =
+                    files.iter().map(|(p, _)| p.display().to_string()).collect();
+                eprintln!("wrote {}", names.join(", "));
+            }
             if let Some(s) = stdout_json {
                 print!("{s}");
             } else if out.is_none() {
@@ -658,7 +673,7 @@ fn studies_command(command: StudiesCommand) -> Result<()> {
             let record_set = record_overrides(record_format, record_dt)?;
             if !studies_dir.is_dir() {
                 return Err(input(format!(
-                    "--studies-dir {}: not a folder (expected the folder holding the study definitions, <name>.toml)",
+                    "--studies-dir {}: not a folder (expected the folder holding the study definitions, <name>.toml; the default is ./studies, so run from the repository's root or give --studies-dir DIR)",
                     studies_dir.display()
                 )));
             }
@@ -686,12 +701,18 @@ fn studies_command(command: StudiesCommand) -> Result<()> {
                     }
                     e => anyhow::Error::new(e).context(format!("study `{n}`")),
                 })?;
+                // Failures the study exists to show (e.g. chattering without the persistent
+                // contact phase) are results; say so, so they do not read as errors.
+                let failed = match (r.summary.failed, r.unexpected.len()) {
+                    (f, 0) if f > 0 => format!("{f} failed, as the study expects"),
+                    (f, u) if u < f => format!("{f} failed, {u} of them unexpectedly"),
+                    (f, _) => format!("{f} failed"),
+                };
                 eprintln!(
-                    "{:<12} {} cases: {} run ({} failed), {} cached, {} in other shards; {:.1} s{}",
+                    "{:<12} {} cases: {} run ({failed}), {} cached, {} in other shards; {:.1} s{}",
                     r.name,
                     r.summary.total,
                     r.summary.ran,
-                    r.summary.failed,
                     r.summary.skipped,
                     r.summary.other_shards,
                     r.wall_seconds,
@@ -726,7 +747,13 @@ fn studies_command(command: StudiesCommand) -> Result<()> {
                         .and_then(|v| v.get("studies").and_then(|s| s.as_object()).cloned())
                         .unwrap_or_default();
                 let threads = threads.unwrap_or_else(rayon::current_num_threads);
+                // A study whose cases were all cached ran nothing: its entry keeps the time of
+                // the run that computed them.
                 for (name, mut entry) in timings {
+                    let ran = entry.get("ran").and_then(|r| r.as_u64()).unwrap_or(0);
+                    if ran == 0 && all.contains_key(&name) {
+                        continue;
+                    }
                     if let Some(e) = entry.as_object_mut() {
                         e.insert("run_total_wall_seconds".into(), total.into());
                         e.insert("threads".into(), threads.into());

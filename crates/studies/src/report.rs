@@ -24,7 +24,8 @@ pub fn modes_table(scene: &Scene) -> Result<String, structure::ModelError> {
             let (p, d) = match b.reference_frequencies_hz.get(i) {
                 Some(r) => (
                     format!("{r:10.3}"),
-                    format!("{:+9.4}", 100.0 * (f[i] - r) / r),
+                    // Rounded to the digits shown first, so round-off prints +0.0000, not -0.0000.
+                    format!("{:+9.4}", (1e6 * (f[i] - r) / r).round() / 1e4 + 0.0),
                 ),
                 None => (format!("{:>10}", "-"), format!("{:>9}", "")),
             };

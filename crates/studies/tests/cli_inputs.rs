@@ -294,3 +294,67 @@ fn modes_of_a_structure_alone() {
         &["s.toml", "analysis.duration", "missing"],
     );
 }
+
+/// Messages that say what to do: a one-column file read as two columns, a record whose PGA
+/// is implausible (units), a negative period, a relative record path that does not resolve,
+/// an output below a file; and `pound modes` prints no negative zero.
+#[test]
+fn messages_that_say_what_to_do() {
+    let d = TempDir::new("messages");
+    let one = d.write("one.txt", "0.1\n0.2\n-0.1\n");
+    let one = one.to_str().unwrap();
+    refused(
+        &["record", one],
+        &["one.txt line 1", "one-column record", "dt"],
+    );
+    // A record in cm/s² read as g: a warning, not an error.
+    let mut text = String::new();
+    for i in 0..100 {
+        text.push_str(&format!(
+            "{:.2} {}\n",
+            i as f64 * 0.01,
+            if i % 2 == 0 { 500 } else { -500 }
+        ));
+    }
+    let cm = d.write("cm.txt", &text);
+    let o = pound(&["record", cm.to_str().unwrap()]);
+    assert!(o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("500.000 g") && err.contains("--units"),
+        "{err}"
+    );
+    refused(
+        &["spectrum", AT2, "--periods", "-1,1"],
+        &["--periods: -1", ">= 0"],
+    );
+    refused(&["spectrum", AT2, "--damping", "-0.1"], &["--damping -0.1"]);
+    // The paper scene copied elsewhere: its record path is relative to the scene's folder.
+    let copy = d.write("scene.toml", &std::fs::read_to_string(scene()).unwrap());
+    refused(
+        &["run", copy.to_str().unwrap(), "--method", "momentum"],
+        &["does not exist", "relative to the scene's folder"],
+    );
+    // An output path below a file.
+    let file = d.write("afile", "");
+    let target = file.join("r.json");
+    let o = pound(&[
+        "run",
+        &scene(),
+        "--method",
+        "momentum",
+        "--set",
+        "analysis.duration=1",
+        "--out",
+        target.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("afile is a file, not a folder"), "{err}");
+    let o = pound(&["modes", &scene()]);
+    let table = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        table.contains("+0.0000") && !table.contains("-0.0000"),
+        "{table}"
+    );
+}

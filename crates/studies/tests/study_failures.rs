@@ -107,13 +107,45 @@ fn expected_solver_errors_are_results() {
         "--out",
         out.to_str().unwrap(),
     ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(o.status.success(), "{err}");
+    // The console line says the failure is the one the study expects.
+    assert!(err.contains("(1 failed, as the study expects)"), "{err}");
     let summary = std::fs::read_to_string(out.join("stability/summary.md")).unwrap();
     assert!(
         summary.contains("end with the solver error they exist to show (1)"),
         "{summary}"
     );
     assert!(summary.contains("Stalled") && !summary.contains("### Failed cases"));
+}
+
+/// A rerun whose cases are all cached ran nothing: `timing.json` keeps the time of the run
+/// that computed them (the README quotes it).
+#[test]
+fn a_cached_rerun_keeps_the_timing_of_the_run_that_computed() {
+    let d = TempDir::new("cachedtiming");
+    let out = d.path("out");
+    let run = || {
+        let o = pound(&[
+            "studies",
+            "run",
+            "paper",
+            "--quick",
+            "--studies-dir",
+            &studies_dir(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let t: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("timing.json")).unwrap())
+                .unwrap();
+        t["studies"]["paper"].clone()
+    };
+    let first = run();
+    assert!(first["ran"].as_u64().unwrap() > 0, "{first}");
+    let second = run();
+    assert_eq!(first, second, "a fully cached rerun replaced the timing");
 }
 
 /// A study scene whose contact is below the roofs: the studies report the story under the

@@ -148,7 +148,7 @@ pub fn solve_with_diagnostics(
         .map(|b| format!("{}/{}", b.range.len(), b.available))
         .collect();
     let mut settings = format!(
-        "{} impulse, modes {}, h = {:.4e} s ({} per record step), persistent contact {}",
+        "{} impulse, modes {}, h = {:.4e} s ({} event-check windows per step), persistent contact {}",
         match p.options.impulse {
             ImpulseVariant::Consistent => "consistent",
             ImpulseVariant::Paper => "paper",

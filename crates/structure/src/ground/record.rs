@@ -580,7 +580,13 @@ impl GroundMotion {
                     origin: origin.to_string(),
                     line: ln,
                     column,
-                    expected: format!("2 values per line (time in s, acceleration in {units})"),
+                    expected: if toks.len() == 1 {
+                        format!(
+                            "2 values per line (time in s, acceleration in {units}); one value per line is a one-column record: give its format (one-column) and its dt"
+                        )
+                    } else {
+                        format!("2 values per line (time in s, acceleration in {units})")
+                    },
                     found: clip(&found),
                 });
             }

@@ -491,7 +491,7 @@ impl Study for Stiffness {
                 .collect();
             if cr >= 1.0 && !lp.is_empty() {
                 reading.push(format!(
-                    "Issue 11 noted per-record slopes of −0.37, −0.25 and −0.51 over k ≥ 1e11 N/m on the three Loma Prieta components that pound (from an earlier version of this study); this run gives {}. A slope from three records of one earthquake is not a convergence rate: the median and 16–84 % range over all records that pound (above) are.",
+                    "An earlier version of this study reported per-record slopes of −0.37, −0.25 and −0.51 over k ≥ 1e11 N/m on the three Loma Prieta components that pound; this run gives {}. A slope from three records of one earthquake is not a convergence rate: the median and 16–84 % range over all records that pound (above) are.",
                     lp.join(", ")
                 ));
             }
