@@ -584,7 +584,8 @@ impl Scene {
     }
 }
 
-/// Applies one `PATH=VALUE` override to a parsed TOML table.
+/// Applies one `PATH=VALUE` override to a parsed TOML table. `PATH=` (nothing after `=`)
+/// removes the key, e.g. `ground_motion.pga=` before `ground_motion.scale=1.0`.
 pub fn apply_override(table: &mut toml::Table, expr: &str) -> Result<(), SceneError> {
     let fail = |message: String| SceneError::Override {
         expr: expr.to_string(),
@@ -597,6 +598,9 @@ pub fn apply_override(table: &mut toml::Table, expr: &str) -> Result<(), SceneEr
     let value = value.trim();
     if path.is_empty() {
         return Err(fail("the path before `=` is empty".into()));
+    }
+    if value.is_empty() {
+        return remove_key(table, path).map_err(fail);
     }
     let parsed: toml::Value = match toml::from_str::<toml::Table>(&format!("v = {value}")) {
         Ok(mut t) => t
@@ -654,6 +658,50 @@ pub fn apply_override(table: &mut toml::Table, expr: &str) -> Result<(), SceneEr
             _ => return Err(fail(format!("`{so_far}` is a value, not a table or array"))),
         };
     }
+    Ok(())
+}
+
+/// Removes the key at the dotted `path` (`PATH=` overrides). A key that is not there is
+/// nothing to remove; an array entry cannot be removed (the indices after it would shift).
+fn remove_key(table: &mut toml::Table, path: &str) -> Result<(), String> {
+    let segs: Vec<&str> = path.split('.').collect();
+    let (last, parents) = segs.split_last().expect("split never yields nothing");
+    let mut cur = table;
+    for (i, seg) in parents.iter().enumerate() {
+        let so_far = segs[..=i].join(".");
+        cur = match cur.get_mut(*seg) {
+            None => return Ok(()),
+            Some(toml::Value::Table(t)) => t,
+            Some(toml::Value::Array(a)) => {
+                let idx: usize = segs[i + 1].parse().map_err(|_| {
+                    format!(
+                        "`{so_far}` is an array: expected a numeric index, found `{}`",
+                        segs[i + 1]
+                    )
+                })?;
+                if i + 1 == parents.len() {
+                    return Err(format!(
+                        "`{so_far}` is an array: its entries cannot be removed, only replaced"
+                    ));
+                }
+                let len = a.len();
+                match a.get_mut(idx) {
+                    Some(toml::Value::Table(t)) => {
+                        // Skip the index segment: continue below the entry.
+                        return remove_key(t, &segs[i + 2..].join("."));
+                    }
+                    Some(_) => return Err(format!("`{so_far}.{idx}` is a value, not a table")),
+                    None => {
+                        return Err(format!(
+                            "index {idx} is out of range: `{so_far}` has {len} entries"
+                        ))
+                    }
+                }
+            }
+            Some(_) => return Err(format!("`{so_far}` is a value, not a table or array")),
+        };
+    }
+    cur.remove(*last);
     Ok(())
 }
 

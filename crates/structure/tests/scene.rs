@@ -524,6 +524,36 @@ fn missing_fields_name_the_field() {
 }
 
 #[test]
+fn an_empty_override_removes_the_key() {
+    // The paper scene scales its record to `pga`; switching to `scale` needs `pga` removed.
+    err_has(
+        Scene::from_file_with_overrides(
+            &paper_scene_path(),
+            &["ground_motion.scale=1.0".to_string()],
+        ),
+        &["pga", "scale"],
+    );
+    let s = load_paper(&["ground_motion.pga=", "ground_motion.scale=1.0"]);
+    let src = s.ground_source.as_ref().unwrap();
+    assert_eq!((src.pga_g, src.factor), (None, 1.0));
+    // A key that is not there: nothing to remove; a nested key below an array entry.
+    let t = load_paper(&[
+        "momentum.capture_velocity=",
+        "buildings.0.initial_velocity=",
+    ]);
+    assert_eq!(t.buildings[0].n_floors(), 15);
+    // An array entry cannot be removed; a path through a value is refused.
+    for (o, expect) in [
+        ("contacts.0=", "cannot be removed"),
+        ("name.x=", "is a value"),
+        ("buildings.9.name=", "out of range"),
+    ] {
+        let r = Scene::from_file_with_overrides(&paper_scene_path(), &[o.to_string()]);
+        err_has(r, &[expect]);
+    }
+}
+
+#[test]
 fn a_scene_read_for_its_structure_needs_no_duration() {
     // `pound modes` reads a scene for its structure alone: neither a record nor
     // `analysis.duration` is needed, and the scene says it cannot be analysed (duration 0).
