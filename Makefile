@@ -32,18 +32,22 @@ robustness: build
 yielding-strong: build
 	./target/release/pound studies run yielding-strong --fresh --out results
 
-# The cross-checks against OpenSees (docs/cli.md): OpenSeesPy in a virtual environment under
-# target/ (its Linux library needs Debian's libblas3 and liblapack3, installed if missing),
-# then the three opt-in tests that run the exported scripts. Needs the network; not in CI.
+# The cross-checks against OpenSees (docs/cli.md): OpenSeesPy (and pandas, for the README's
+# Python example) in a virtual environment under target/ (OpenSees' Linux library needs
+# Debian's libblas3 and liblapack3, installed if missing), then the three opt-in tests that
+# run the exported scripts and the docs test that runs the README's example. Needs the
+# network; not in CI.
 OPENSEES_VERSION ?= 3.7.1.2
 OPENSEES_VENV := target/opensees-venv
 opensees: build
 	@if command -v dpkg >/dev/null && ! dpkg -s libblas3 liblapack3 >/dev/null 2>&1; then \
 		$(if $(filter 0,$(shell id -u)),,sudo) sh -c "apt-get update -qq && apt-get install -y -qq libblas3 liblapack3"; fi
 	test -x $(OPENSEES_VENV)/bin/python3 || python3 -m venv $(OPENSEES_VENV)
-	$(OPENSEES_VENV)/bin/pip install -q openseespy==$(OPENSEES_VERSION)
+	$(OPENSEES_VENV)/bin/pip install -q openseespy==$(OPENSEES_VERSION) pandas
 	PATH="$(abspath $(OPENSEES_VENV))/bin:$$PATH" $(CARGO) test --release -p studies \
 		--test export --test wall_cli --test yield_opensees -- --ignored
+	PATH="$(abspath $(OPENSEES_VENV))/bin:$$PATH" $(CARGO) test --release -p studies \
+		--test docs python_example
 
 bench:
 	$(CARGO) bench -p solvers

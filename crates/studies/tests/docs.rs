@@ -258,8 +258,12 @@ fn python_example_matches_the_outputs_and_runs_where_pandas_is_installed() {
         eprintln!("python3 with pandas not found: the example was checked, not run");
         return;
     }
+    // The example's own paths, pointed at this test's outputs (both must be there).
+    for p in ["\"/tmp/run.json\"", "\"results/stiffness/"] {
+        assert!(code.contains(p), "the README example no longer reads {p}");
+    }
     let script = code
-        .replace("\"run.json\"", &format!("{:?}", run.to_str().unwrap()))
+        .replace("\"/tmp/run.json\"", &format!("{:?}", run.to_str().unwrap()))
         .replace(
             "\"results/stiffness/",
             &format!("\"{}/stiffness/", out.to_str().unwrap()),

@@ -537,12 +537,14 @@ fn opensees_agrees_with_pound_newmark() {
                 }
             }
         }
+        // The same Newmark scheme on the same model: round-off (docs/cli.md: 2.0e-12,
+        // 1.8e-10 and 1.9e-12 for these three scenes), as the wall's test asks.
         eprintln!("{law} {sets:?}: worst relative difference {worst:.3e}");
-        assert!(worst < 0.02, "{law} {sets:?}: {worst}");
+        assert!(worst < 1e-8, "{law} {sets:?}: {worst}");
         let (na, nb) = (
             a["impacts"].as_array().unwrap().len(),
             b["impacts"].as_array().unwrap().len(),
         );
-        assert!(na > 0 && na.abs_diff(nb) <= nb / 10, "impacts {na} vs {nb}");
+        assert!(na > 0 && na == nb, "impacts {na} vs {nb}");
     }
 }

@@ -18,8 +18,10 @@ use studies::export::{opensees_caveats, opensees_script};
 mod common;
 use common::{opensees_python, pound, TempDir};
 
-/// Relative agreement required on every peak story shear (issue 13).
-const SHEAR_TOL: f64 = 1e-6;
+/// Relative agreement required on every peak story shear, drift and ductility: both programs
+/// run the same Newmark scheme on the same model, so they differ by round-off (measured 1.6e-12
+/// in shears, 3.9e-12 in drifts; the requirement when this was built was 1e-6).
+const SHEAR_TOL: f64 = 1e-10;
 
 fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
