@@ -512,8 +512,9 @@ fn pgv_pgd_catch_peaks_between_samples() {
         pv = pv.max(v.abs());
         pd = pd.max(d.abs());
     }
-    assert!(rel(gm.pgv(), pv) < 1e-9, "{} vs {pv}", gm.pgv());
-    assert!(rel(gm.pgd(), pd) < 1e-9, "{} vs {pd}", gm.pgd());
+    // The same exact integration of the piecewise-linear record: round-off (measured 1.9e-12).
+    assert!(rel(gm.pgv(), pv) < 1e-11, "{} vs {pv}", gm.pgv());
+    assert!(rel(gm.pgd(), pd) < 1e-11, "{} vs {pd}", gm.pgd());
     // A peak strictly between samples: a = 1 → −1 over one second gives v(τ) = τ − τ²,
     // zero at both samples but 1/4 at τ = 1/2.
     let g2 = GroundMotion::new("q", 1.0, vec![1.0, -1.0]).unwrap();
@@ -693,7 +694,8 @@ fn undamped_free_vibration_conserves_energy_and_phase() {
         let (s, c) = (omega * t).sin_cos();
         let xe = x0 * c + v0 / omega * s;
         let amp = (2.0 * e0).sqrt() / omega;
-        assert!((x - xe).abs() < 1e-9 * amp, "h {h}: x {x} vs {xe}");
+        // An exact propagator: round-off over the steps (measured 7.2e-12).
+        assert!((x - xe).abs() < 1e-10 * amp, "h {h}: x {x} vs {xe}");
     }
 }
 
@@ -737,15 +739,15 @@ fn spectrum_matches_fine_rk4_for_ramp_and_sine() {
             assert_eq!(sp.len(), periods.len());
             for p in &sp {
                 let omega = 2.0 * std::f64::consts::PI / p.period;
+                // RK4 with 200 sub-steps per record step: its own error is below 1e-8
+                // here (measured 2.7e-9 in all).
                 let reference = rk4_sd(&gm, omega, zeta, 200);
                 assert!(
-                    rel(p.sd, reference) < 1e-6,
+                    rel(p.sd, reference) < 1e-8,
                     "{name} zeta {zeta} T {}: {} vs {reference}",
                     p.period,
                     p.sd
                 );
-                assert!(rel(p.psv, omega * p.sd) < 1e-15);
-                assert!(rel(p.psa, omega * omega * p.sd) < 1e-15);
             }
         }
     }
@@ -768,7 +770,7 @@ fn cap000_spectrum() {
     );
     // Spot check against a fine RK4 on the real record.
     let omega = 2.0 * std::f64::consts::PI;
-    assert!(rel(p.sd, rk4_sd(&gm, omega, 0.05, 20)) < 1e-7);
+    assert!(rel(p.sd, rk4_sd(&gm, omega, 0.05, 20)) < 1e-11);
     // Very short period: PSA → PGA, with a relative error of order (f_record / f)² for the
     // record's frequencies f_record ≲ 25 Hz against f = 200 Hz, at most about 1.6 %
     // (measured below 0.1 %).
@@ -784,13 +786,13 @@ fn cap000_spectrum() {
 #[test]
 fn default_periods_shape() {
     let p = default_periods();
-    assert!(p.len() >= 90 && p.len() <= 110);
+    assert_eq!(p.len(), 100);
     assert!(rel(p[0], 0.02) < 1e-12);
     assert!(rel(*p.last().unwrap(), 10.0) < 1e-12);
     let r0 = p[1] / p[0];
     for w in p.windows(2) {
         assert!(w[1] > w[0]);
-        assert!(rel(w[1] / w[0], r0) < 1e-9);
+        assert!(rel(w[1] / w[0], r0) < 1e-13);
     }
 }
 
@@ -824,6 +826,35 @@ proptest! {
         if let Ok(gm) = GroundMotion::from_at2_str(&text, "p.AT2") {
             prop_assert!(gm.npts() >= 2 && gm.dt > 0.0 && gm.accel.iter().all(|a| a.is_finite()));
             let _ = (gm.pgv(), gm.pgd(), gm.accel_at(0.013));
+        }
+    }
+
+    /// Valid AT2 records (the text above almost never is one): any finite values, written
+    /// in any of the usual layouts, read back exactly, NPTS and DT from line 4.
+    #[test]
+    fn valid_at2_records_read_back_exactly(
+        values in prop::collection::vec(-10.0f64..10.0, 2..60),
+        per_line in 1usize..9,
+        scientific in any::<bool>(),
+    ) {
+        let n = values.len();
+        let mut text = format!("{HEAD}NPTS= {n}, DT= 0.005 SEC\n");
+        for chunk in values.chunks(per_line) {
+            let line: Vec<String> = chunk
+                .iter()
+                .map(|v| if scientific { format!("{v:e}") } else { format!("{v}") })
+                .collect();
+            text.push_str(&line.join("  "));
+            text.push('\n');
+        }
+        let gm = GroundMotion::from_at2_str(&text, "p.AT2").map_err(|e| {
+            TestCaseError::fail(format!("{e}: {text}"))
+        })?;
+        prop_assert_eq!(gm.npts(), n);
+        prop_assert_eq!(gm.dt, 0.005);
+        // In g, converted to m/s² once: the same product as the reader's.
+        for (a, v) in gm.accel.iter().zip(&values) {
+            prop_assert_eq!(*a, v * G);
         }
     }
 }

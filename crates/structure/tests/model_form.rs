@@ -14,18 +14,21 @@ const EPS: f64 = f64::EPSILON;
 #[test]
 fn uniform_stick_fitted_to_f1_matches_the_closed_form() {
     // Uniform stick, N floors: ω_n = 2 √(k/m) sin((2n − 1) π / (2 (2N + 1))).
+    // Calibration by exact scaling of the eigenproblem: round-off, within 64·n·ε (measured
+    // 3.7e-14).
     for &(n, m, f1) in &[(15usize, 2.0e6, 0.67), (15, 2.4e6, 0.81), (3, 1.0, 1.0)] {
+        let tol = 64.0 * 15.0 * EPS;
         let c = calibrate_first_frequency("b", n, m, f1, 1.0, 0.05).unwrap();
         let f = c.building.modes().unwrap().frequencies_hz();
-        assert!((f[0] - f1).abs() / f1 < 1e-10, "f1 {} vs {f1}", f[0]);
+        assert!((f[0] - f1).abs() / f1 < tol, "f1 {} vs {f1}", f[0]);
         let s1 = (PI / (2.0 * (2 * n + 1) as f64)).sin();
         let k = m * (2.0 * PI * f1 / (2.0 * s1)).powi(2);
         for kj in &c.building.story_stiffness {
-            assert!((kj - k).abs() / k < 1e-10, "story stiffness {kj} vs {k}");
+            assert!((kj - k).abs() / k < tol, "story stiffness {kj} vs {k}");
         }
         // The second mode of the uniform stick, from the closed form.
         let s2 = (3.0 * PI / (2.0 * (2 * n + 1) as f64)).sin();
-        assert!((f[1] / f[0] - s2 / s1).abs() < 1e-10 * s2 / s1);
+        assert!((f[1] / f[0] - s2 / s1).abs() < tol * s2 / s1);
         assert_eq!(c.taper, 0.0);
     }
 }
@@ -44,7 +47,11 @@ fn tapered_stick_has_the_requested_ratio_and_f1() {
             assert!(((w[1] - w[0]) - d0).abs() <= 64.0 * EPS * k[0].max(k[14]));
         }
         let f = c.building.modes().unwrap().frequencies_hz();
-        assert!((f[0] - 0.67).abs() / 0.67 < 1e-10, "f1 {}", f[0]);
+        assert!(
+            (f[0] - 0.67).abs() / 0.67 < 64.0 * 15.0 * EPS,
+            "f1 {}",
+            f[0]
+        );
     }
     // A softer top lowers f2/f1 below the uniform stick's, a stiffer top raises it.
     let ratio = |r: f64| {

@@ -63,6 +63,12 @@ fn impulse_runs_end_to_end_and_matches_the_momentum_method() {
     );
     assert!(!ii.is_empty());
     assert_eq!(mi.len(), ii.len());
+    // The same impacts at the same instants: the impulse method integrates to tol 1e-8, so
+    // its event instants agree to about that (measured 1.2e-8 s): within 1e-7 s.
+    for (a, b) in mi.iter().zip(ii) {
+        let (ta, tb) = (a["time"].as_f64().unwrap(), b["time"].as_f64().unwrap());
+        assert!((ta - tb).abs() < 1e-7, "impact at {ta} vs {tb}");
+    }
     for (b_m, b_i) in m["buildings"]
         .as_array()
         .unwrap()
@@ -71,7 +77,8 @@ fn impulse_runs_end_to_end_and_matches_the_momentum_method() {
     {
         for key in ["story_shear_max", "floor_displacement_max"] {
             for (p, q) in floats(&b_m[key]).iter().zip(floats(&b_i[key])) {
-                assert!((p - q).abs() <= 1e-6 * p.abs(), "{key}: {p} vs {q}");
+                // Within 10 × the impulse method's tol 1e-8 (measured 1.4e-8).
+                assert!((p - q).abs() <= 1e-7 * p.abs(), "{key}: {p} vs {q}");
             }
         }
     }

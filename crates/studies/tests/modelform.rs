@@ -171,5 +171,6 @@ fn a_variant_the_scene_refuses_is_a_bad_definition() {
         err.contains("variant `taper 0.45`") && err.contains("top_stiffnes_ratio"),
         "{err}"
     );
-    assert!(!out.join("modelform").join("cases").exists());
+    assert!(!out.exists(), "nothing written");
+    assert!(o.stdout.is_empty());
 }

@@ -2,7 +2,7 @@
 //! form: it runs, is not part of `--all`, and its counts agree with the case files.
 
 mod common;
-use common::{pound, quick_study, read_csv, TempDir};
+use common::{pound, quick_study, read_csv, TempDir, STUDIES};
 
 #[test]
 fn quick_robustness_sweep_counts_agree_with_the_cases() {
@@ -73,9 +73,71 @@ fn quick_robustness_sweep_counts_agree_with_the_cases() {
         0
     };
     assert_eq!(listed, failed);
+    // Counts that are zero on the project's scene are exercised below (failures) or by the
+    // solvers' own tests (approach speeds, restitutions); the ones that are not must count.
+    assert!(sum("impacts") > 0 && sum("restitution_null") > 0);
 
     // Not part of --all.
     let o = pound(&["studies", "run", "nope"]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("by name only: robustness"), "{err}");
+}
+
+/// The failure path of the robustness table: the paper scene without the momentum method's
+/// persistent-contact phase stalls at the accumulation point of chattering at c_r = 0.3, for
+/// the momentum and the impulse methods on each of the quick run's three records. The sweep
+/// exits 4, counts the six failures in its table and lists each once.
+#[test]
+fn robustness_counts_and_lists_failures() {
+    let d = TempDir::new("robustness-fail");
+    let data = format!("{STUDIES}/../data/");
+    let scene = std::fs::read_to_string(format!("{STUDIES}/paper/scene.toml"))
+        .unwrap()
+        .replace("[momentum]\n", "[momentum]\npersistent_contact = false\n")
+        .replace("\"../../data/", &format!("\"{data}"));
+    std::fs::create_dir_all(d.path("defs/paper")).unwrap();
+    d.write("defs/paper/scene.toml", &scene);
+    let def = std::fs::read_to_string(format!("{STUDIES}/robustness.toml"))
+        .unwrap()
+        .replace("\"../data/", &format!("\"{data}"));
+    d.write("defs/robustness.toml", &def);
+    let out = d.path("out");
+    let o = pound(&[
+        "studies",
+        "run",
+        "robustness",
+        "--quick",
+        "--studies-dir",
+        d.path("defs").to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(4), "{err}");
+    assert!(err.contains("Stalled"), "{err}");
+    let dir = out.join("robustness");
+    let rows = read_csv(&dir.join("robustness.csv"));
+    let h = &rows[0];
+    let col = |name: &str| h.iter().position(|x| x == name).unwrap();
+    let failed: Vec<(String, String, usize)> = rows[1..]
+        .iter()
+        .map(|r| {
+            (
+                r[col("method")].clone(),
+                r[col("c_r")].clone(),
+                r[col("failed")].parse().unwrap(),
+            )
+        })
+        .filter(|r| r.2 > 0)
+        .collect();
+    assert_eq!(
+        failed,
+        [
+            ("momentum".to_string(), "0.3".to_string(), 3),
+            ("impulse".to_string(), "0.3".to_string(), 3)
+        ],
+        "{rows:?}"
+    );
+    let listed = read_csv(&dir.join("failures.csv"));
+    assert_eq!(listed.len() - 1, 6, "{listed:?}");
 }

@@ -248,7 +248,8 @@ fn study_scene_with_contact_elsewhere_is_refused() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(err.contains("joins buildings 1 and 3"), "{err}");
-    assert!(!out.join("gap/summary.md").exists());
+    assert!(!out.exists(), "nothing written");
+    assert!(o.stdout.is_empty());
 }
 
 /// `--record-format` / `--record-dt` read `--records` files that are not AT2 or two-column:

@@ -82,8 +82,12 @@ fn gap_runs_a_yielding_scene_with_ductility_and_hysteretic_energy_in_the_json() 
             e["hysteretic"].as_f64().unwrap(),
         );
         assert!(hyst > 0.0 && hyst < input, "{integrator}: {e}");
+        // Adaptive: the error control, 10 × the default rtol 1e-8 (measured 3.0e-8).
+        // Newmark: a discretisation error of order Δt² where a step crosses a yield kink
+        // (measured 3.9e-6 at Δt = 1 ms).
+        let bound = if integrator == "adaptive" { 1e-7 } else { 1e-5 };
         assert!(
-            e["balance_error"].as_f64().unwrap().abs() < 1e-4 * input,
+            e["balance_error"].as_f64().unwrap().abs() < bound * input,
             "{integrator}: {e}"
         );
         let mut sum = 0.0;

@@ -127,8 +127,10 @@ fn check_quick(study: &str) {
                     num(&e[0][col(&format!("drift_max_{b}_m"))]),
                     num(&i[0][col(&format!("drift_max_{b}_m"))]),
                 );
+                // The global error of the adaptive runs, within 10 × their tolerance
+                // (measured 0.12 × tolerance).
                 assert!(
-                    (di / de - 1.0).abs() < 100.0 * tolerance,
+                    (di / de - 1.0).abs() < 10.0 * tolerance,
                     "{m} at {lo} g, pounding {pounding}, {b}: drift {di} vs elastic {de}"
                 );
             }
@@ -149,7 +151,7 @@ fn check_quick(study: &str) {
     assert_eq!(at_lo.len(), 3 * inelastic.len());
     for r in at_lo {
         assert_eq!(num(&r[vcol("share e > band")]), 0.0, "{r:?}");
-        assert!(num(&r[vcol("e median")]) < 100.0 * tolerance, "{r:?}");
+        assert!(num(&r[vcol("e median")]) < 10.0 * tolerance, "{r:?}");
     }
 
     // (3) The response table is the case rows (one record: median = the value).
@@ -251,6 +253,7 @@ fn bad_yielding_definitions_are_refused_naming_the_key() {
         for w in words {
             assert!(err.contains(w), "{err:?} should name {w:?}");
         }
-        assert!(!out.join("yielding").join("cases").exists());
+        assert!(!out.exists(), "nothing written");
+        assert!(o.stdout.is_empty());
     }
 }
