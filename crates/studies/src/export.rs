@@ -409,9 +409,11 @@ SETTINGS = {settings_lit}
             pystr(law),
             num(k),
             num(dashpot),
-            scene.buildings[c.left].name,
+            // Names quoted and escaped (a name is user text: a raw newline in a comment
+            // would end it and start code).
+            pystr(&scene.buildings[c.left].name),
             c.left_dof + 1,
-            if c.wall { "the wall" } else { &scene.buildings[c.right].name },
+            if c.wall { "the wall".to_string() } else { pystr(&scene.buildings[c.right].name) },
             if c.wall { 0 } else { c.right_dof + 1 },
         );
     }

@@ -150,7 +150,9 @@ pub fn record_table(gm: &GroundMotion) -> String {
 
 /// Summary of a run for stdout.
 /// Amplification factors per building and story: peak story shear with contact over the
-/// peak story shear of the same model without contact (same method and options).
+/// peak story shear of the same model without contact (same method and options). Where the
+/// latter is 0 (a building at rest without ground motion) the factor is not finite: the
+/// summary prints –, the JSON null.
 pub fn amplification(run: &RunOutput, without: &RunOutput) -> Vec<Vec<f64>> {
     run.buildings
         .iter()
@@ -241,9 +243,18 @@ pub fn run_summary(scene: &Scene, run: &RunOutput, amplification: Option<&[Vec<f
                 ));
             }
             if let Some(a) = amp {
-                s.push_str(&format!(" {:14.3}", a[j]));
+                if a[j].is_finite() {
+                    s.push_str(&format!(" {:14.3}", a[j]));
+                } else {
+                    s.push_str(&format!(" {:>14}", "–"));
+                }
             }
             s.push('\n');
+        }
+        if amp.is_some_and(|a| a.iter().any(|x| !x.is_finite())) {
+            s.push_str(
+                "  –: no amplification where the story carries no shear without contact (e.g. a building at rest without ground motion)\n",
+            );
         }
         if let Some(eh) = b.hysteretic_energy {
             s.push_str(&format!("  hysteretic energy (J): {eh:.4e}\n"));

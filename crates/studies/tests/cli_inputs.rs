@@ -358,3 +358,35 @@ fn messages_that_say_what_to_do() {
         "{table}"
     );
 }
+
+/// A building at rest without ground motion has no story shear without contact: its
+/// amplification is undefined, printed as – with a note and written as null, not inf.
+#[test]
+fn undefined_amplification_is_not_inf() {
+    let d = TempDir::new("free-vibration");
+    let f = d.write(
+        "fv.toml",
+        "[[buildings]]\nname = \"a\"\nmasses = [1e5, 1e5]\nstory_stiffness = [1e8, 1e8]\ninitial_velocity = [0.5, 1.0]\n\
+         [[buildings]]\nname = \"b\"\nmasses = [1e5, 1e5]\nstory_stiffness = [1e8, 1e8]\n\
+         [[contacts]]\nleft = \"a\"\nright = \"b\"\nfloors = \"aligned\"\ngap = 0.01\n[analysis]\nduration = 2.0\n",
+    );
+    let f = f.to_str().unwrap();
+    let o = pound(&["run", f, "--method", "momentum"]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(!text.contains("inf") && !text.contains("NaN"), "{text}");
+    assert!(
+        text.contains("no amplification where the story carries no shear"),
+        "{text}"
+    );
+    let o = pound(&["run", f, "--method", "momentum", "--out", "-"]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(
+        v["amplification"][1]["story_shear"],
+        serde_json::json!([null, null])
+    );
+    assert!(v["amplification"][0]["story_shear"][0]
+        .as_f64()
+        .unwrap()
+        .is_finite());
+}

@@ -213,16 +213,11 @@ fn python_example_matches_the_outputs_and_runs_where_pandas_is_installed() {
 
     let studies = root().join("studies");
     let out = d.path("results");
-    let o = pound(&[
-        "studies",
-        "run",
+    let o = common::quick_run(
         "stiffness",
-        "--quick",
-        "--studies-dir",
         studies.to_str().unwrap(),
-        "--out",
         out.to_str().unwrap(),
-    ]);
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let header = |f: &str| -> Vec<String> {
         read(&out.join("stiffness").join(f))

@@ -548,3 +548,25 @@ fn opensees_agrees_with_pound_newmark() {
         assert!(na > 0 && na == nb, "impacts {na} vs {nb}");
     }
 }
+
+/// A building name is user text: in the script it is always a quoted, escaped Python string,
+/// so a newline in a name cannot end a comment and start code.
+#[test]
+fn names_cannot_inject_code_into_the_script() {
+    let evil = r#""a\n__import__('os').system('echo PWNED'),#""#;
+    let o: Vec<String> = vec![
+        format!("buildings.0.name={evil}"),
+        format!("contacts.0.left={evil}"),
+        "gap_element.law=linear".into(),
+    ];
+    let scene = Scene::from_file_with_overrides(&paper_scene_path(), &o).unwrap();
+    assert!(scene.buildings[0].name.contains('\n'));
+    let script = opensees_script(&scene).unwrap();
+    for line in script.lines() {
+        assert!(
+            !line.trim_start().starts_with("__import__"),
+            "a name became code: {line}"
+        );
+    }
+    assert!(script.contains(r#""a\n__import__('os').system('echo PWNED'),#""#));
+}

@@ -155,16 +155,11 @@ fn a_variant_the_scene_refuses_is_a_bad_definition() {
         .replace("top_stiffness_ratio=0.45\"", "top_stiffnes_ratio=0.45\"");
     d.write("modelform.toml", &def);
     let out = d.path("results");
-    let o = pound(&[
-        "studies",
-        "run",
+    let o = common::quick_run(
         "modelform",
-        "--quick",
-        "--studies-dir",
         d.path("").to_str().unwrap(),
-        "--out",
         out.to_str().unwrap(),
-    ]);
+    );
     assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(

@@ -102,16 +102,11 @@ fn robustness_counts_and_lists_failures() {
         .replace("\"../data/", &format!("\"{data}"));
     d.write("defs/robustness.toml", &def);
     let out = d.path("out");
-    let o = pound(&[
-        "studies",
-        "run",
+    let o = common::quick_run(
         "robustness",
-        "--quick",
-        "--studies-dir",
         d.path("defs").to_str().unwrap(),
-        "--out",
         out.to_str().unwrap(),
-    ]);
+    );
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(4), "{err}");
     assert!(err.contains("Stalled"), "{err}");

@@ -35,16 +35,11 @@ fn failed_cases_exit_4_and_are_named() {
         ),
     );
     let out = d.path("out");
-    let o = pound(&[
-        "studies",
-        "run",
+    let o = common::quick_run(
         "restitution",
-        "--quick",
-        "--studies-dir",
         d.path("defs").to_str().unwrap(),
-        "--out",
         out.to_str().unwrap(),
-    ]);
+    );
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(4), "{err}");
     assert!(err.contains("case(s) failed"), "{err}");
@@ -97,16 +92,7 @@ fn unreadable_record_is_refused_before_the_sweep() {
 fn expected_solver_errors_are_results() {
     let d = TempDir::new("expectedfail");
     let out = d.path("out");
-    let o = pound(&[
-        "studies",
-        "run",
-        "stability",
-        "--quick",
-        "--studies-dir",
-        &studies_dir(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = common::quick_run("stability", &studies_dir(), out.to_str().unwrap());
     let err = String::from_utf8_lossy(&o.stderr).into_owned();
     assert!(o.status.success(), "{err}");
     // The console line says the failure is the one the study expects.
@@ -126,16 +112,7 @@ fn a_cached_rerun_keeps_the_timing_of_the_run_that_computed() {
     let d = TempDir::new("cachedtiming");
     let out = d.path("out");
     let run = || {
-        let o = pound(&[
-            "studies",
-            "run",
-            "paper",
-            "--quick",
-            "--studies-dir",
-            &studies_dir(),
-            "--out",
-            out.to_str().unwrap(),
-        ]);
+        let o = common::quick_run("paper", &studies_dir(), out.to_str().unwrap());
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         let t: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(out.join("timing.json")).unwrap())
@@ -169,16 +146,7 @@ fn studies_report_the_contact_story() {
         .replace("\"../data/", &format!("\"{}/../data/", studies_dir()));
     d.write("gap.toml", &def);
     let out = d.path("out");
-    let o = pound(&[
-        "studies",
-        "run",
-        "gap",
-        "--quick",
-        "--studies-dir",
-        d.0.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = common::quick_run("gap", d.0.to_str().unwrap(), out.to_str().unwrap());
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let summary = std::fs::read_to_string(out.join("gap/summary.md")).unwrap();
     assert!(
@@ -235,16 +203,7 @@ fn study_scene_with_contact_elsewhere_is_refused() {
         .replace("\"../data/", &format!("\"{}/../data/", studies_dir()));
     d.write("gap.toml", &def);
     let out = d.path("out");
-    let o = pound(&[
-        "studies",
-        "run",
-        "gap",
-        "--quick",
-        "--studies-dir",
-        d.0.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = common::quick_run("gap", d.0.to_str().unwrap(), out.to_str().unwrap());
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(err.contains("joins buildings 1 and 3"), "{err}");
@@ -369,4 +328,60 @@ fn record_format_of_user_records() {
     let o = pound(&["studies", "run", "modes", "--record-format", "at2"]);
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("--records"));
+}
+
+/// Study values that cannot make a grid (empty lists, counts below what the tables need, a
+/// stiffness range through zero) are bad input: exit 2 naming the key, nothing written. They
+/// used to panic (index out of bounds, exit 101) after writing part of the results.
+#[test]
+fn empty_or_degenerate_study_grids_are_refused() {
+    let studies = studies_dir();
+    for (study, key, line, expect) in [
+        (
+            "stiffness",
+            "stiffness_count",
+            "stiffness_count = 0",
+            "at least 2",
+        ),
+        (
+            "stiffness",
+            "stiffness_min",
+            "stiffness_min = 0.0",
+            "0 < min < max",
+        ),
+        ("gap", "gap_count", "gap_count = 0", "at least 2"),
+        ("modes", "max_modes", "max_modes = 0", "at least 5"),
+        (
+            "restitution",
+            "restitution",
+            "restitution = []",
+            "at least one c_r",
+        ),
+    ] {
+        let d = TempDir::new("degenerate");
+        let def: String = std::fs::read_to_string(format!("{studies}/{study}.toml"))
+            .unwrap()
+            .lines()
+            .map(|l| {
+                if l.starts_with(&format!("{key} =")) {
+                    line.to_string()
+                } else {
+                    l.replace("\"../data/", &format!("\"{studies}/../data/"))
+                        .replace("\"paper/", &format!("\"{studies}/paper/"))
+                }
+            })
+            .collect::<Vec<_>>()
+            .join("\n");
+        assert!(def.contains(line), "{study}.toml has no `{key} =` line");
+        d.write(&format!("{study}.toml"), &def);
+        let out = d.path("out");
+        let o = common::quick_run(study, d.0.to_str().unwrap(), out.to_str().unwrap());
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{study} {line}: {err}");
+        assert!(
+            err.contains(&format!("`{key}`")) && err.contains(expect),
+            "{err}"
+        );
+        assert!(!out.exists(), "{study} {line}: nothing written");
+    }
 }

@@ -238,16 +238,11 @@ fn bad_yielding_definitions_are_refused_naming_the_key() {
         let d = TempDir::new("yielding-bad");
         d.write("yielding.toml", &bad);
         let out = d.path("results");
-        let o = common::pound(&[
-            "studies",
-            "run",
+        let o = common::quick_run(
             "yielding",
-            "--quick",
-            "--studies-dir",
             d.path("").to_str().unwrap(),
-            "--out",
             out.to_str().unwrap(),
-        ]);
+        );
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(2), "{err}");
         for w in words {

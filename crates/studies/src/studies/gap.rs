@@ -86,6 +86,12 @@ pub fn cqc_rho(zeta: f64, r: f64) -> f64 {
 impl Study for Gap {
     fn cases(&self, ctx: &Ctx) -> Result<Vec<CaseSpec>> {
         let d: Def = ctx.def()?;
+        super::require(ctx, d.gap_count >= 2, || {
+            format!("`gap_count` = {}: expected at least 2 gaps", d.gap_count)
+        })?;
+        super::require(ctx, d.gap_max.is_finite() && d.gap_max > 0.0, || {
+            format!("`gap_max` = {:?}: expected a gap > 0 (m)", d.gap_max)
+        })?;
         let mut v = Vec::new();
         let recs = study_records(ctx, d.records.as_deref(), &d.record_dirs)?;
         record_classes(ctx, &d.record_table, &recs)?;

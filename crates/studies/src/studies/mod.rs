@@ -136,6 +136,19 @@ impl Ctx {
     }
 }
 
+/// A definition value the study cannot use: `Err` naming the definition file and what was
+/// expected (exit 2 before any case runs), unless `ok`.
+pub fn require(ctx: &Ctx, ok: bool, message: impl FnOnce() -> String) -> Result<()> {
+    if ok {
+        Ok(())
+    } else {
+        Err(StudyError::Definition {
+            file: ctx.def_file.clone(),
+            message: message(),
+        })
+    }
+}
+
 /// Short label of a record file: its stem without the PEER `RSN…_…_` prefix.
 pub fn record_label(path: &str) -> String {
     let stem = Path::new(path)

@@ -62,6 +62,12 @@ fn modes(ctx: &Ctx, d: &Def) -> Vec<usize> {
 impl Study for Modes {
     fn cases(&self, ctx: &Ctx) -> Result<Vec<CaseSpec>> {
         let d: Def = ctx.def()?;
+        super::require(ctx, d.max_modes >= 5, || {
+            format!(
+                "`max_modes` = {}: expected at least 5 (the study compares 1, 5, … modes)",
+                d.max_modes
+            )
+        })?;
         let mut v = Vec::new();
         let recs = study_records(ctx, d.records.as_deref(), &d.record_dirs)?;
         record_classes(ctx, &d.record_table, &recs)?;

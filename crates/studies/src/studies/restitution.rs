@@ -77,6 +77,16 @@ fn methods(ctx: &Ctx, d: &Def, rec: &str, cr: f64) -> Vec<(String, CaseSpec)> {
 impl Study for Restitution {
     fn cases(&self, ctx: &Ctx) -> Result<Vec<CaseSpec>> {
         let d: Def = ctx.def()?;
+        super::require(
+            ctx,
+            !d.restitution.is_empty() && d.restitution.iter().all(|c| (0.0..=1.0).contains(c)),
+            || {
+                format!(
+                    "`restitution` = {:?}: expected at least one c_r, each in [0, 1]",
+                    d.restitution
+                )
+            },
+        )?;
         let mut v = Vec::new();
         let recs = study_records(ctx, d.records.as_deref(), &d.record_dirs)?;
         record_classes(ctx, &d.record_table, &recs)?;

@@ -60,6 +60,25 @@ struct Grid {
 }
 
 fn grid(ctx: &Ctx, d: &Def) -> Result<Grid> {
+    super::require(ctx, d.stiffness_count >= 2, || {
+        format!(
+            "`stiffness_count` = {}: expected at least 2 stiffnesses",
+            d.stiffness_count
+        )
+    })?;
+    super::require(
+        ctx,
+        d.stiffness_min.is_finite() && d.stiffness_min > 0.0 && d.stiffness_max > d.stiffness_min,
+        || {
+            format!(
+                "`stiffness_min` = {:?}, `stiffness_max` = {:?}: expected 0 < min < max (N/m)",
+                d.stiffness_min, d.stiffness_max
+            )
+        },
+    )?;
+    super::require(ctx, !d.restitution.is_empty(), || {
+        "`restitution` must list at least one c_r".into()
+    })?;
     let (ks, crs) = if ctx.opts.quick {
         (
             logspace(d.stiffness_min, d.stiffness_max, 4),

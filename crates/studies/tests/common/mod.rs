@@ -54,20 +54,25 @@ impl Drop for TempDir {
 /// The repository's `studies/` folder.
 pub const STUDIES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../studies");
 
-/// Runs `pound studies run <study> --quick` into `<d>/results`, asserts success and returns
-/// the study's output folder.
-pub fn quick_study(d: &TempDir, study: &str) -> PathBuf {
-    let out = d.path("results");
-    let o = pound(&[
+/// `pound studies run <study> --quick --studies-dir <studies_dir> --out <out>`.
+pub fn quick_run(study: &str, studies_dir: &str, out: &str) -> std::process::Output {
+    pound(&[
         "studies",
         "run",
         study,
         "--quick",
         "--studies-dir",
-        STUDIES,
+        studies_dir,
         "--out",
-        out.to_str().unwrap(),
-    ]);
+        out,
+    ])
+}
+
+/// Runs `pound studies run <study> --quick` into `<d>/results`, asserts success and returns
+/// the study's output folder.
+pub fn quick_study(d: &TempDir, study: &str) -> PathBuf {
+    let out = d.path("results");
+    let o = quick_run(study, STUDIES, out.to_str().unwrap());
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     out.join(study)
 }
