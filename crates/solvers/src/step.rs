@@ -92,3 +92,44 @@ impl StepOutcome {
         }
     }
 }
+
+/// A guard against a stepper that takes steps without advancing time (a contact or kink
+/// state it cannot resolve, each step ending where it began): after [`Progress::WINDOW`]
+/// steps over which time advanced less than [`Progress::MIN_ADVANCE`], the run stops with
+/// `SolverError::Stalled` naming the instant, where it used to spin until
+/// `analysis.max_steps` (minutes) and then report a spent budget.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Progress {
+    /// Time of the last check that found progress, s.
+    t: f64,
+    /// Steps taken at that check.
+    steps: u64,
+}
+
+impl Progress {
+    /// Steps allowed without progress (a legitimate run advances by ≥ 1e-9 s far sooner:
+    /// its steps are bounded below by the record step over at most 4096 check windows, or by
+    /// the adaptive step's underflow limit).
+    pub const WINDOW: u64 = 100_000;
+    /// Advance that counts as progress, s.
+    pub const MIN_ADVANCE: f64 = 1e-9;
+
+    /// Checks the run at time `t` after `steps` steps; `Err(reason)` when it is stuck.
+    pub fn check(&mut self, t: f64, steps: u64) -> Result<(), String> {
+        if t > self.t + Self::MIN_ADVANCE || steps < self.steps {
+            self.t = t;
+            self.steps = steps;
+            return Ok(());
+        }
+        if steps - self.steps > Self::WINDOW {
+            return Err(format!(
+                "time advanced less than {:e} s over {} steps (from t = {:.9} s): the contact or yield state cannot be resolved there; \
+                 try another tolerance or time step, or check the scene for degenerate values (tiny masses or yield shears, extreme stiffness ratios)",
+                Self::MIN_ADVANCE,
+                steps - self.steps,
+                self.t
+            ));
+        }
+        Ok(())
+    }
+}

@@ -173,3 +173,38 @@ fn stiff_neighbour_at_cr_0_8_finishes() {
     assert_sound(&out);
     assert!(!out.persistent_contacts.is_empty());
 }
+
+/// Runs whose steps stop advancing time end at once with `Stalled` naming the instant, where
+/// they used to spin for minutes until `analysis.max_steps` and report a spent budget:
+/// the momentum method on the aligned pair with 10 modes at c_r = 0.1 (stuck at
+/// t = 9.574 s), and the impulse method with a yield shear of 1 N (stuck in its kink search).
+#[test]
+fn runs_that_stop_advancing_time_stall_with_a_reason() {
+    let cases = [
+        (
+            solvers::Method::Momentum,
+            vec!["momentum.modes=10", "contacts.0.restitution=0.1"],
+        ),
+        (
+            solvers::Method::Impulse,
+            vec![
+                "buildings.1.story_law=bilinear",
+                "buildings.1.yield_shear=1",
+                "buildings.1.hardening_ratio=0.999",
+            ],
+        ),
+    ];
+    for (method, over) in cases {
+        let s = structure::testing::paper_scene_aligned(&over);
+        match solvers::run(&s, method, None) {
+            Err(solvers::SolverError::Stalled { time, reason }) => {
+                assert!(time > 0.0 && time < s.duration, "{method}: t = {time}");
+                assert!(reason.contains("time advanced less than"), "{reason}");
+            }
+            other => panic!(
+                "{method} {over:?}: expected Stalled, got {:?}",
+                other.map(|o| o.stats)
+            ),
+        }
+    }
+}

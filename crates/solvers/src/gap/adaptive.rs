@@ -623,6 +623,8 @@ pub(crate) struct GapStepper<'a> {
     stats: Stats,
     rejected_before: bool,
     total_steps: u64,
+    /// Stops a run whose steps no longer advance time ([`crate::step::Progress`]).
+    progress: crate::step::Progress,
     max_steps: u64,
     scratch: Vec<f64>,
     y_end: Vec<f64>,
@@ -716,6 +718,7 @@ impl<'a> GapStepper<'a> {
             stats,
             rejected_before: false,
             total_steps: 0,
+            progress: crate::step::Progress::default(),
             max_steps: limits.max_steps,
             scratch: vec![0.0; dim],
             y_end: vec![0.0; dim],
@@ -802,6 +805,9 @@ impl<'a> GapStepper<'a> {
                 steps: self.total_steps - 1,
                 limit: self.max_steps,
             });
+        }
+        if let Err(reason) = self.progress.check(t, self.total_steps) {
+            return Err(SolverError::Stalled { time: t, reason });
         }
         let err = {
             let modes = ledger.modes();

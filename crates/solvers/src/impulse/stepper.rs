@@ -143,6 +143,8 @@ pub(super) struct ImpulseStepper<'a> {
     seg: Segment,
     rejected_before: bool,
     total_steps: u64,
+    /// Stops a run whose steps no longer advance time ([`crate::step::Progress`]).
+    progress: crate::step::Progress,
     /// Scratch of the right-hand side: 2·|held| numbers.
     pub(super) buf: Vec<f64>,
     /// Scratch of one state (event search).
@@ -210,6 +212,7 @@ impl<'a> ImpulseStepper<'a> {
             seg: sys.segment(0),
             rejected_before: false,
             total_steps: 0,
+            progress: crate::step::Progress::default(),
             buf: Vec::new(),
             scratch: vec![0.0; dim],
             y_end: vec![0.0; dim],
@@ -329,6 +332,9 @@ impl<'a> ImpulseStepper<'a> {
                 steps: self.total_steps - 1,
                 limit: self.cfg.max_steps,
             });
+        }
+        if let Err(reason) = self.progress.check(t, self.total_steps) {
+            return Err(SolverError::Stalled { time: t, reason });
         }
         let err = {
             let (stories, held, buf, seg) =

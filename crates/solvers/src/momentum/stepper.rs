@@ -74,6 +74,8 @@ pub struct Stepper<'a> {
     pub impacts: Vec<Impact>,
     pub phases: Vec<PersistentContact>,
     pub stats: Stats,
+    /// Stops a run whose segments no longer advance time ([`crate::step::Progress`]).
+    pub(super) progress: crate::step::Progress,
     pub diag: Diagnostics,
     pub(super) guard: ImpactRateGuard,
     pub(super) last_impacts: Vec<VecDeque<f64>>,
@@ -310,6 +312,7 @@ impl<'a> Stepper<'a> {
                 min_step: f64::INFINITY,
                 ..Stats::default()
             },
+            progress: crate::step::Progress::default(),
             diag: Diagnostics {
                 sub_steps: p.sub,
                 base_step: p.h,
@@ -617,12 +620,18 @@ impl<'a> Stepper<'a> {
     /// The rare part of [`Stepper::count_step`]: the step budget and the finiteness check.
     #[cold]
     #[inline(never)]
-    fn count_step_checks(&self) -> Result<(), SolverError> {
+    fn count_step_checks(&mut self) -> Result<(), SolverError> {
         if self.stats.steps > self.p.limits.max_steps {
             return Err(SolverError::StepBudget {
                 time: self.s.t,
                 steps: self.stats.steps,
                 limit: self.p.limits.max_steps,
+            });
+        }
+        if let Err(reason) = self.progress.check(self.s.t, self.stats.steps) {
+            return Err(SolverError::Stalled {
+                time: self.s.t,
+                reason,
             });
         }
         if self.stats.steps.is_multiple_of(64) && !self.state_is_finite() {
