@@ -390,3 +390,37 @@ fn undefined_amplification_is_not_inf() {
         .unwrap()
         .is_finite());
 }
+
+/// The momentum method's continuous peaks assume at most one extremum per record step: a kept
+/// mode shorter than two record steps gets a warning (not on the paper scene).
+#[test]
+fn a_mode_shorter_than_two_record_steps_is_warned() {
+    let run = |extra: &[&str]| {
+        let mut a = vec![
+            "run",
+            "PLACEHOLDER",
+            "--method",
+            "momentum",
+            "--no-baseline",
+            "--set",
+            "analysis.duration=1",
+        ];
+        let s = scene();
+        a[1] = &s;
+        a.extend_from_slice(extra);
+        let o = pound(&a);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stderr).into_owned()
+    };
+    assert!(!run(&[]).contains("may be low"));
+    let err = run(&[
+        "--set",
+        "buildings.0.target_frequencies_hz=",
+        "--set",
+        "buildings.0.story_stiffness=1e12",
+    ]);
+    assert!(
+        err.contains("mode 15 has a period of 0.0045 s") && err.contains("may be low"),
+        "{err}"
+    );
+}
