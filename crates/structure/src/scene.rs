@@ -599,26 +599,38 @@ pub fn apply_override(table: &mut toml::Table, expr: &str) -> Result<(), SceneEr
     if path.is_empty() {
         return Err(fail("the path before `=` is empty".into()));
     }
-    if value.is_empty() {
-        return remove_key(table, path).map_err(fail);
-    }
-    let parsed: toml::Value = match toml::from_str::<toml::Table>(&format!("v = {value}")) {
-        Ok(mut t) => t
-            .remove("v")
-            .unwrap_or(toml::Value::String(value.to_string())),
-        // A number TOML cannot hold (1e400 overflows a double) is not a word.
-        Err(_) if value.parse::<f64>().is_ok() => {
-            return Err(fail(format!(
-                "`{value}` is out of the range of a double-precision number (about ±1.8e308)"
-            )))
-        }
-        Err(_) => toml::Value::String(value.to_string()),
+    // `PATH=`: remove the key (None); else the value, parsed as TOML (a bare word is a string).
+    let parsed: Option<toml::Value> = if value.is_empty() {
+        None
+    } else {
+        Some(
+            match toml::from_str::<toml::Table>(&format!("v = {value}")) {
+                Ok(mut t) => t
+                    .remove("v")
+                    .unwrap_or(toml::Value::String(value.to_string())),
+                // A number TOML cannot hold (1e400 overflows a double) is not a word.
+                Err(_) if value.parse::<f64>().is_ok() => {
+                    return Err(fail(format!(
+                    "`{value}` is out of the range of a double-precision number (about ±1.8e308)"
+                )))
+                }
+                Err(_) => toml::Value::String(value.to_string()),
+            },
+        )
     };
+    // Setting creates missing tables on the way; removing stops at a missing one (nothing to
+    // remove). An array entry can be replaced, not removed (the indices after it would shift).
     let segs: Vec<&str> = path.split('.').collect();
     let mut cur: &mut toml::Value = {
         let first = segs[0];
         if segs.len() == 1 {
-            table.insert(first.to_string(), parsed);
+            match parsed {
+                Some(v) => table.insert(first.to_string(), v),
+                None => table.remove(first),
+            };
+            return Ok(());
+        }
+        if parsed.is_none() && !table.contains_key(first) {
             return Ok(());
         }
         table
@@ -642,14 +654,27 @@ pub fn apply_override(table: &mut toml::Table, expr: &str) -> Result<(), SceneEr
                     ))
                 })?;
                 if last {
-                    *slot = parsed;
-                    return Ok(());
+                    return match parsed {
+                        Some(v) => {
+                            *slot = v;
+                            Ok(())
+                        }
+                        None => Err(fail(format!(
+                            "`{so_far}` is an array: its entries cannot be removed, only replaced"
+                        ))),
+                    };
                 }
                 slot
             }
             toml::Value::Table(t) => {
                 if last {
-                    t.insert(seg.to_string(), parsed);
+                    match parsed {
+                        Some(v) => t.insert(seg.to_string(), v),
+                        None => t.remove(*seg),
+                    };
+                    return Ok(());
+                }
+                if parsed.is_none() && !t.contains_key(*seg) {
                     return Ok(());
                 }
                 t.entry(seg.to_string())
@@ -658,50 +683,6 @@ pub fn apply_override(table: &mut toml::Table, expr: &str) -> Result<(), SceneEr
             _ => return Err(fail(format!("`{so_far}` is a value, not a table or array"))),
         };
     }
-    Ok(())
-}
-
-/// Removes the key at the dotted `path` (`PATH=` overrides). A key that is not there is
-/// nothing to remove; an array entry cannot be removed (the indices after it would shift).
-fn remove_key(table: &mut toml::Table, path: &str) -> Result<(), String> {
-    let segs: Vec<&str> = path.split('.').collect();
-    let (last, parents) = segs.split_last().expect("split never yields nothing");
-    let mut cur = table;
-    for (i, seg) in parents.iter().enumerate() {
-        let so_far = segs[..=i].join(".");
-        cur = match cur.get_mut(*seg) {
-            None => return Ok(()),
-            Some(toml::Value::Table(t)) => t,
-            Some(toml::Value::Array(a)) => {
-                let idx: usize = segs[i + 1].parse().map_err(|_| {
-                    format!(
-                        "`{so_far}` is an array: expected a numeric index, found `{}`",
-                        segs[i + 1]
-                    )
-                })?;
-                if i + 1 == parents.len() {
-                    return Err(format!(
-                        "`{so_far}` is an array: its entries cannot be removed, only replaced"
-                    ));
-                }
-                let len = a.len();
-                match a.get_mut(idx) {
-                    Some(toml::Value::Table(t)) => {
-                        // Skip the index segment: continue below the entry.
-                        return remove_key(t, &segs[i + 2..].join("."));
-                    }
-                    Some(_) => return Err(format!("`{so_far}.{idx}` is a value, not a table")),
-                    None => {
-                        return Err(format!(
-                            "index {idx} is out of range: `{so_far}` has {len} entries"
-                        ))
-                    }
-                }
-            }
-            Some(_) => return Err(format!("`{so_far}` is a value, not a table or array")),
-        };
-    }
-    cur.remove(*last);
     Ok(())
 }
 
