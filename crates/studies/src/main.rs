@@ -488,28 +488,6 @@ fn run(cli: Cli) -> Result<()> {
             if let Some(g) = &scene.ground {
                 implausible_pga(g, "ground_motion.units and ground_motion.scale");
             }
-            if let (Method::Momentum, Some(g)) = (method, &scene.ground) {
-                // The continuous peaks assume at most one extremum of a quantity per record
-                // step; a kept mode whose half period is shorter than the step breaks that
-                // and the peaks can come out low (found by an audit: 16 % on a stiff roof
-                // story with a 0.02 s record).
-                for b in &scene.buildings {
-                    let n = scene.momentum.modes.unwrap_or(usize::MAX).min(b.n_floors());
-                    if let Ok(m) = b.modes() {
-                        let f = m.frequencies_hz();
-                        if let Some(&fmax) = f.get(n.saturating_sub(1)) {
-                            let t_min = 1.0 / fmax;
-                            if t_min < 2.0 * g.dt {
-                                eprintln!(
-                                    "warning: {}'s mode {n} has a period of {t_min:.4} s, shorter than two record steps ({:.4} s): the momentum method's peaks may be low; resample the record finer or keep fewer modes (momentum.modes)",
-                                    b.name,
-                                    2.0 * g.dt
-                                );
-                            }
-                        }
-                    }
-                }
-            }
             if let (Method::Momentum, Some(n)) = (method, scene.momentum.modes) {
                 for b in scene.buildings.iter().filter(|b| b.n_floors() < n) {
                     eprintln!(
@@ -538,7 +516,12 @@ fn run(cli: Cli) -> Result<()> {
                 })?;
                 Some(report::amplification(&result, &base))
             };
-            for w in report::overlap_warnings(&result) {
+            for w in result
+                .warnings
+                .iter()
+                .cloned()
+                .chain(report::overlap_warnings(&result))
+            {
                 eprintln!("warning: {w}");
             }
             // All or nothing: the history and the result are written together or not at all

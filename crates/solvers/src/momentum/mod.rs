@@ -184,6 +184,7 @@ pub fn solve_with_diagnostics(
             impacts,
             persistent_contacts: phases,
             r_n,
+            warnings: problem.peak_sampling_warning(scene).into_iter().collect(),
             ..RunOutput::on_scene(
                 scene, "momentum", settings, buildings, energy, stats, overlaps,
             )

@@ -33,6 +33,29 @@ fn stiffest_mode(modal: &Modal, w: f64) -> (usize, usize) {
         .map_or((1, n + 1), |(i, b)| (i + 1, n - b.range.start + 1))
 }
 
+impl Problem {
+    /// The momentum method's continuous peaks see one sign change of a rate per record step,
+    /// so a kept mode whose period is below two record steps can hide an extremum between
+    /// samples and the peaks can come out low (an audit found 16 % on a stiff roof story under
+    /// a 0.02 s record). The warning, if the shortest kept period is that short.
+    pub fn peak_sampling_warning(&self, scene: &Scene) -> Option<String> {
+        scene.ground.as_ref()?;
+        let w_max = self.modal.omega.iter().cloned().fold(0.0, f64::max);
+        let t_min = 2.0 * std::f64::consts::PI / w_max;
+        if t_min >= 2.0 * self.record_dt {
+            return None;
+        }
+        let (b, n) = stiffest_mode(&self.modal, w_max);
+        Some(format!(
+            "{}'s mode {n} has a period of {t_min:.4} s, shorter than two record steps \
+             ({:.4} s): the momentum method's peaks may be low; resample the record finer or \
+             keep fewer modes (momentum.modes)",
+            scene.buildings[b - 1].name,
+            2.0 * self.record_dt
+        ))
+    }
+}
+
 /// Everything that does not change during a run.
 #[derive(Debug, Clone)]
 pub struct Problem {
