@@ -219,11 +219,6 @@ pub struct RunOutput {
     /// Floors that would strike an adjacent building mid-story (floor-to-column impact, not
     /// modelled); only with `story_height` on both buildings.
     pub unmodelled: Vec<structure::scene::UnmodelledFacing>,
-    /// Conditions under which an output may be less accurate than the method promises (e.g.
-    /// the momentum method's peaks with a kept mode shorter than two record steps); empty,
-    /// and absent from the JSON, when there is none.
-    #[serde(skip_serializing_if = "Vec::is_empty")]
-    pub warnings: Vec<String>,
 }
 
 impl RunOutput {
@@ -252,12 +247,12 @@ impl RunOutput {
             r_n: Vec::new(),
             overlaps: overlaps.finish(scene),
             unmodelled: crate::overlap::unmodelled(scene),
-            warnings: Vec::new(),
         }
     }
 }
 
-/// Sampled state over time: at every record point and at every event instant (impact,
+/// Sampled state over time: at every record point (for the momentum method, every base step:
+/// a record step it splits is sampled at its parts) and at every event instant (impact,
 /// contact closure or opening, release), so the grid is not uniform.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct History {

@@ -213,6 +213,22 @@ enum MethodArg {
     Impulse,
 }
 
+/// A number for a message or a period column: as written for everyday magnitudes, in exponent
+/// form otherwise (`1e-160` or `1e300`, not hundreds of digits).
+fn short(x: f64) -> String {
+    if x == 0.0 || (1e-3..1e6).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
+/// Smallest nonzero `pound spectrum --periods` value (s). Far below any record step the
+/// oscillator is rigid: its PSA is the PGA that period 0 gives (at 1e-6 s on Capitola 000,
+/// dt = 0.005 s, to 1.1e-7), so nothing is lost; and below about 5e-154 s the exact step's
+/// ω² overflows f64 and the spectrum came out NaN.
+const MIN_PERIOD: f64 = 1e-6;
+
 /// Largest `--threads` accepted: beyond it, starting the threads alone takes minutes.
 const MAX_THREADS: usize = 1024;
 
@@ -440,14 +456,37 @@ fn run(cli: Cli) -> Result<()> {
                 gm = gm.scaled_to_pga(p);
             }
             let periods = periods.unwrap_or_else(default_periods);
-            if let Some(t) = periods.iter().find(|t| !(t.is_finite() && **t >= 0.0)) {
-                return Err(input(format!("--periods: {t} is not a period >= 0 (s)")));
+            if let Some(t) = periods
+                .iter()
+                .find(|t| !(t.is_finite() && (**t == 0.0 || **t >= MIN_PERIOD)))
+            {
+                return Err(input(format!(
+                    "--periods: {} is not a period of 0 (the rigid limit, PSA = PGA) or >= {MIN_PERIOD:e} s (below {MIN_PERIOD:e} s the oscillator is rigid: give 0)",
+                    short(*t)
+                )));
+            }
+            let spectrum = response_spectrum(&gm, &periods, damping);
+            // Accelerations near the largest f64 (a huge --pga) overflow: refused, never a
+            // NaN or inf in the output.
+            if let Some(p) = spectrum
+                .iter()
+                .find(|p| !(p.sd.is_finite() && p.psv.is_finite() && p.psa.is_finite()))
+            {
+                return Err(input(format!(
+                    "{}: the spectrum at period {} s is not finite (SD = {} m, PSA = {} m/s^2): the record's accelerations{} are too large to compute with",
+                    record.record.display(),
+                    short(p.period),
+                    short(p.sd),
+                    short(p.psa),
+                    pga.map(|g| format!(" scaled to --pga {}", short(g)))
+                        .unwrap_or_default()
+                )));
             }
             let mut csv = String::from("period_s,sd_m,psv_m_per_s,psa_g\n");
-            for p in response_spectrum(&gm, &periods, damping) {
+            for p in spectrum {
                 csv.push_str(&format!(
                     "{},{:.9e},{:.9e},{:.9e}\n",
-                    p.period,
+                    short(p.period),
                     p.sd,
                     p.psv,
                     p.psa / structure::G
@@ -516,12 +555,7 @@ fn run(cli: Cli) -> Result<()> {
                 })?;
                 Some(report::amplification(&result, &base))
             };
-            for w in result
-                .warnings
-                .iter()
-                .cloned()
-                .chain(report::overlap_warnings(&result))
-            {
+            for w in report::overlap_warnings(&result) {
                 eprintln!("warning: {w}");
             }
             // All or nothing: the history and the result are written together or not at all
@@ -786,11 +820,13 @@ fn studies_command(command: StudiesCommand) -> Result<()> {
                 }
             }
             let out = out.unwrap_or_else(|| dirs[0].clone());
-            // A shard missing, or folders without manifests, is bad input (exit 2); the check
-            // comes before anything is written.
+            // A shard missing, a case file that does not parse, or folders without
+            // manifests, is bad input (exit 2); the checks come before anything is written.
             let (merged, unexpected) =
                 st::merge(&dirs, &out, &studies_dir).map_err(|e| match e {
                     studies::sweep::StudyError::Incomplete { .. }
+                    | studies::sweep::StudyError::CaseFile { .. }
+                    | studies::sweep::StudyError::Manifest { .. }
                     | studies::sweep::StudyError::Definition { .. }
                     | studies::sweep::StudyError::NoManifests { .. } => input(e),
                     e => anyhow::Error::new(e),

@@ -1,13 +1,20 @@
 //! Human-readable tables for the command line.
 
 use solvers::RunOutput;
-use structure::{GroundMotion, Scene};
+use structure::{GroundMotion, Modes, Scene};
+
+/// The modes of every building, in scene order: solved once each, for the building's rows
+/// and for every contact that touches it (an aligned pair of 1000-story buildings has 1000
+/// contacts).
+fn building_modes(scene: &Scene) -> Result<Vec<Modes>, structure::ModelError> {
+    scene.buildings.iter().map(|b| b.modes()).collect()
+}
 
 /// `pound modes` table.
 pub fn modes_table(scene: &Scene) -> Result<String, structure::ModelError> {
+    let modes = building_modes(scene)?;
     let mut s = String::new();
-    for b in &scene.buildings {
-        let m = b.modes()?;
+    for (b, m) in scene.buildings.iter().zip(&modes) {
         let f = m.frequencies_hz();
         let t = m.periods();
         let e = m.effective_mass_ratios();
@@ -43,12 +50,12 @@ pub fn modes_table(scene: &Scene) -> Result<String, structure::ModelError> {
     }
     for (ci, c) in scene.contacts.iter().enumerate() {
         let (bl, br) = (&scene.buildings[c.left], &scene.buildings[c.right]);
-        let rl = bl.modes()?.contact_flexibility(c.left_dof);
+        let rl = modes[c.left].contact_flexibility(c.left_dof);
         // A wall has no modes: its column stays empty.
         let rr = if c.wall {
             vec![]
         } else {
-            br.modes()?.contact_flexibility(c.right_dof)
+            modes[c.right].contact_flexibility(c.right_dof)
         };
         let right = if c.wall {
             "the wall".to_string()
@@ -75,9 +82,9 @@ pub fn modes_table(scene: &Scene) -> Result<String, structure::ModelError> {
 
 /// `pound modes --json` document.
 pub fn modes_json(scene: &Scene) -> Result<serde_json::Value, structure::ModelError> {
+    let modes = building_modes(scene)?;
     let mut buildings = Vec::new();
-    for b in &scene.buildings {
-        let m = b.modes()?;
+    for (b, m) in scene.buildings.iter().zip(&modes) {
         buildings.push(serde_json::json!({
             "name": b.name,
             "floors": b.n_floors(),
@@ -93,9 +100,7 @@ pub fn modes_json(scene: &Scene) -> Result<serde_json::Value, structure::ModelEr
     }
     let mut contacts = Vec::new();
     for c in &scene.contacts {
-        let rl = scene.buildings[c.left]
-            .modes()?
-            .contact_flexibility(c.left_dof);
+        let rl = modes[c.left].contact_flexibility(c.left_dof);
         if c.wall {
             // A wall: no right floor and no right flexibility.
             contacts.push(serde_json::json!({
@@ -106,9 +111,7 @@ pub fn modes_json(scene: &Scene) -> Result<serde_json::Value, structure::ModelEr
             }));
             continue;
         }
-        let rr = scene.buildings[c.right]
-            .modes()?
-            .contact_flexibility(c.right_dof);
+        let rr = modes[c.right].contact_flexibility(c.right_dof);
         contacts.push(serde_json::json!({
             "left": scene.buildings[c.left].name, "left_floor": c.left_dof + 1,
             "right": scene.buildings[c.right].name, "right_floor": c.right_dof + 1,

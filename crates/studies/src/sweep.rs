@@ -22,7 +22,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use solvers::{History, Method, SolverError};
-use structure::Scene;
+use structure::{Scene, SceneError};
 
 use crate::io::{write_atomic, write_json, OutputError};
 
@@ -42,6 +42,13 @@ pub enum StudyError {
         total: usize,
         ids: String,
     },
+    /// A case file that `studies merge` would use cannot be read or parsed (truncated,
+    /// corrupt) or holds another case.
+    #[error("{path}: not a usable case file ({message}); rerun the shard that wrote it (a rerun recomputes the case files it cannot read)")]
+    CaseFile { path: String, message: String },
+    /// A study manifest that `studies merge` reads does not parse (truncated, corrupt).
+    #[error("{path}: not a usable study manifest ({message}); rerun the shard that wrote it")]
+    Manifest { path: String, message: String },
     /// `studies merge` found no `<study>/manifest.json` under any of the folders.
     #[error("no study manifests found under {dirs}")]
     NoManifests { dirs: String },
@@ -229,6 +236,12 @@ impl CaseSpec {
 
     /// Loads the scene of this case.
     pub fn load_scene(&self, studies_dir: &Path) -> std::result::Result<Scene, String> {
+        self.try_scene(studies_dir).map_err(|e| e.to_string())
+    }
+
+    /// [`CaseSpec::load_scene`] with the scene's own error (its key, for the message that
+    /// names the override that set it).
+    pub fn try_scene(&self, studies_dir: &Path) -> std::result::Result<Scene, SceneError> {
         let mut set = self.set.clone();
         if let Some(r) = &self.record {
             let path = Self::resolve(r, studies_dir);
@@ -239,7 +252,6 @@ impl CaseSpec {
             }
         }
         Scene::from_file_with_overrides(&Self::resolve(&self.scene, studies_dir), &set)
-            .map_err(|e| e.to_string())
     }
 }
 
@@ -724,6 +736,21 @@ pub struct RunSummary {
 
 pub fn case_path(study_dir: &Path, id: &str) -> PathBuf {
     study_dir.join("cases").join(format!("{id}.json"))
+}
+
+/// Reads the case file `path` of case `id`: an error naming the file when it cannot be
+/// read, does not parse (truncated, corrupt) or holds another case.
+pub fn read_case(path: &Path, id: &str) -> Result<CaseResult> {
+    let bad = |message: String| StudyError::CaseFile {
+        path: path.display().to_string(),
+        message,
+    };
+    let text = std::fs::read_to_string(path).map_err(|e| bad(e.to_string()))?;
+    let r: CaseResult = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
+    if r.spec.id != id {
+        return Err(bad(format!("holds case {}, expected {id}", r.spec.id)));
+    }
+    Ok(r)
 }
 
 /// Reads a finished case, if its file exists and parses.

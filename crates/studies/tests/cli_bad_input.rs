@@ -1059,6 +1059,105 @@ fn studies_arguments_that_cannot_be_used_are_refused() {
     );
 }
 
+/// Every file under `dir` with its bytes (paths relative to `dir`).
+fn snapshot(dir: &Path) -> std::collections::BTreeMap<String, Vec<u8>> {
+    let mut m = std::collections::BTreeMap::new();
+    let mut todo = vec![dir.to_path_buf()];
+    while let Some(d) = todo.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                todo.push(p);
+            } else {
+                let rel = p.strip_prefix(dir).unwrap().display().to_string();
+                m.insert(rel, std::fs::read(&p).unwrap());
+            }
+        }
+    }
+    m
+}
+
+/// `studies merge` with a truncated case file in a shard stops before anything is written:
+/// exit 2 naming the file, no output folder, and the first shard (the default output) left
+/// as it was. It used to copy the other case files and the manifest first.
+#[test]
+fn merge_with_a_damaged_case_file_writes_nothing() {
+    let d = TempDir::new("merge-damaged");
+    let studies = concat!(env!("CARGO_MANIFEST_DIR"), "/../../studies");
+    let (s1, s2) = (d.path("s1"), d.path("s2"));
+    for (i, shard) in [(1, &s1), (2, &s2)] {
+        let r = pound(&[
+            "studies".to_string(),
+            "run".into(),
+            "paper".into(),
+            "--quick".into(),
+            "--shard".into(),
+            format!("{i}/2"),
+            "--studies-dir".into(),
+            studies.into(),
+            "--out".into(),
+            s(shard),
+        ]);
+        assert_eq!(
+            r.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&r.stderr)
+        );
+    }
+    let merge = |out: Option<&Path>| {
+        let mut a = vec![
+            "studies".to_string(),
+            "merge".into(),
+            s(&s1),
+            s(&s2),
+            "--studies-dir".into(),
+            studies.into(),
+        ];
+        if let Some(o) = out {
+            a.extend(["--out".into(), s(o)]);
+        }
+        a
+    };
+    // The intact shards merge (so the refusal below is the damaged file's).
+    let r = pound(&merge(Some(&d.path("whole"))));
+    assert_eq!(
+        r.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&r.stderr)
+    );
+    let mut cases: Vec<_> = std::fs::read_dir(s2.join("paper/cases"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    cases.sort();
+    let case = &cases[0];
+    let text = std::fs::read(case).unwrap();
+    std::fs::write(case, &text[..text.len() / 2]).unwrap();
+    let name = case.file_name().unwrap().to_str().unwrap();
+    let shard1 = snapshot(&s1);
+    let out = d.path("merged");
+    assert_bad(
+        &merge(Some(&out)),
+        &[&format!("s2/paper/cases/{name}"), "not a usable case file"],
+        &[&out],
+    );
+    // Without --out the first shard is the output: nothing in it changes.
+    assert_bad(&merge(None), &[name, "not a usable case file"], &[]);
+    assert!(snapshot(&s1) == shard1, "the first shard was changed");
+    // A truncated manifest is bad input too (it was exit 1), naming the file.
+    std::fs::write(case, &text).unwrap();
+    let manifest = s1.join("paper/manifest.json");
+    let m = std::fs::read(&manifest).unwrap();
+    std::fs::write(&manifest, &m[..m.len() / 2]).unwrap();
+    assert_bad(
+        &merge(Some(&out)),
+        &["s1/paper/manifest.json", "not a usable study manifest"],
+        &[&out],
+    );
+}
+
 /// `--out` and `--history` naming one file (the JSON would replace the history) are refused
 /// before the analysis runs.
 #[test]

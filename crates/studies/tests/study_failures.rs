@@ -330,12 +330,57 @@ fn record_format_of_user_records() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("--records"));
 }
 
+/// Runs `pound studies run <study> --quick` on the repository's definition with the line
+/// starting `<key> =` replaced by `line` (paths made absolute) and `extra` arguments, and
+/// checks the bad-input contract: exit 2, every fragment of `expect` on stderr, nothing on
+/// stdout, no output folder.
+#[track_caller]
+fn definition_refused(study: &str, key: &str, line: &str, extra: &[&str], expect: &[&str]) {
+    let studies = studies_dir();
+    let d = TempDir::new("refused-def");
+    let def: String = std::fs::read_to_string(format!("{studies}/{study}.toml"))
+        .unwrap()
+        .lines()
+        .map(|l| {
+            if l.starts_with(&format!("{key} =")) {
+                line.to_string()
+            } else {
+                l.replace("\"../data/", &format!("\"{studies}/../data/"))
+                    .replace("\"paper/", &format!("\"{studies}/paper/"))
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    assert!(def.contains(line), "{study}.toml has no `{key} =` line");
+    d.write(&format!("{study}.toml"), &def);
+    let out = d.path("out");
+    let mut args = vec![
+        "studies",
+        "run",
+        study,
+        "--quick",
+        "--studies-dir",
+        d.0.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend(extra);
+    let o = pound(&args);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{study} {line}: {err}");
+    assert!(!err.contains("panicked"), "{err}");
+    for e in expect {
+        assert!(err.contains(e), "{study} {line}: {e:?} not in {err}");
+    }
+    assert!(o.stdout.is_empty(), "{study} {line}: nothing on stdout");
+    assert!(!out.exists(), "{study} {line}: nothing written");
+}
+
 /// Study values that cannot make a grid (empty lists, counts below what the tables need, a
 /// stiffness range through zero) are bad input: exit 2 naming the key, nothing written. They
 /// used to panic (index out of bounds, exit 101) after writing part of the results.
 #[test]
 fn empty_or_degenerate_study_grids_are_refused() {
-    let studies = studies_dir();
     for (study, key, line, expect) in [
         (
             "stiffness",
@@ -357,31 +402,93 @@ fn empty_or_degenerate_study_grids_are_refused() {
             "restitution = []",
             "at least one c_r",
         ),
+        ("robustness", "gaps", "gaps = []", "at least one gap"),
+        (
+            "robustness",
+            "restitution",
+            "restitution = [1.5]",
+            "in [0, 1]",
+        ),
+        (
+            "robustness",
+            "record_dirs",
+            "record_dirs = [\"no-such-folder\"]",
+            "cannot be listed",
+        ),
     ] {
-        let d = TempDir::new("degenerate");
-        let def: String = std::fs::read_to_string(format!("{studies}/{study}.toml"))
-            .unwrap()
-            .lines()
-            .map(|l| {
-                if l.starts_with(&format!("{key} =")) {
-                    line.to_string()
-                } else {
-                    l.replace("\"../data/", &format!("\"{studies}/../data/"))
-                        .replace("\"paper/", &format!("\"{studies}/paper/"))
-                }
-            })
-            .collect::<Vec<_>>()
-            .join("\n");
-        assert!(def.contains(line), "{study}.toml has no `{key} =` line");
-        d.write(&format!("{study}.toml"), &def);
-        let out = d.path("out");
-        let o = common::quick_run(study, d.0.to_str().unwrap(), out.to_str().unwrap());
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert_eq!(o.status.code(), Some(2), "{study} {line}: {err}");
-        assert!(
-            err.contains(&format!("`{key}`")) && err.contains(expect),
-            "{err}"
-        );
-        assert!(!out.exists(), "{study} {line}: nothing written");
+        definition_refused(study, key, line, &[], &[&format!("`{key}`"), expect]);
     }
+}
+
+/// A damping ratio of a study definition outside 0 <= ζ < 1 (the paper study's spectrum,
+/// the gap study's CQC correlation) is bad input: exit 2 naming the key and the range,
+/// nothing written. They used to run (ζ >= 1 is not an underdamped oscillator).
+#[test]
+fn study_damping_ratios_outside_0_to_1_are_refused() {
+    for (study, key, line) in [
+        ("paper", "spectrum_damping", "spectrum_damping = 1.0"),
+        ("paper", "spectrum_damping", "spectrum_damping = 1.5"),
+        ("paper", "spectrum_damping", "spectrum_damping = -0.05"),
+        ("gap", "damping", "damping = -0.05"),
+        ("gap", "damping", "damping = 1.0"),
+    ] {
+        definition_refused(
+            study,
+            key,
+            line,
+            &[],
+            &[&format!("`{key}`"), "0 <= ζ < 1", &format!("{study}.toml")],
+        );
+    }
+}
+
+/// A study value that the scene refuses in some of the study's cases but not in its first
+/// (the robustness study's first case is the momentum method, which takes no gap-element
+/// value) is refused before the sweep: exit 2 naming the case, the scene key and the
+/// override, nothing written. It used to sweep through the failed cases and exit 4.
+#[test]
+fn a_value_refused_in_any_case_is_refused_before_the_sweep() {
+    definition_refused(
+        "robustness",
+        "gap_stiffness",
+        "gap_stiffness = 0.0",
+        &[],
+        &[
+            "study `robustness`",
+            "robustness.toml",
+            "gap adaptive",
+            "key `gap_element.stiffness`",
+            "expected a stiffness > 0",
+            "gap_element.stiffness=0e0",
+        ],
+    );
+    definition_refused(
+        "robustness",
+        "newmark_time_step",
+        "newmark_time_step = 0.0",
+        &[],
+        &[
+            "gap newmark",
+            "key `gap_element.time_step`",
+            "expected a step > 0",
+        ],
+    );
+    // A Newmark step that fits the first record's step (0.005 s) but not the second's
+    // (0.0024 s): only the cases on the second record are refused.
+    let rec = |f: &str| format!("{}/../data/ground-motions/{f}", studies_dir());
+    let (first, second) = (
+        rec("RSN752_LOMAP_CAP000.AT2"),
+        rec("near-field/RSN292_ITALY-A-STU_223.AT2"),
+    );
+    definition_refused(
+        "robustness",
+        "newmark_time_step",
+        "newmark_time_step = 0.003",
+        &["--records", &first, &second],
+        &[
+            "gap newmark, record ITALY-A-STU_223",
+            "key `gap_element.time_step`",
+            "record's step (0.0024 s)",
+        ],
+    );
 }

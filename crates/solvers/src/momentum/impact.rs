@@ -111,13 +111,17 @@ impl Stepper<'_> {
             if hist.len() > 3 {
                 hist.pop_front();
             }
+            // Three impacts whose intervals shrink geometrically, the last shorter than a
+            // record step and the rest of the series too: chattering. The scale is the
+            // record step, not the base step, so that splitting long record steps (for the
+            // peaks) does not change what counts as chattering.
             let accumulating = hist.len() == 3 && {
                 let (d1, d2) = (hist[1] - hist[0], hist[2] - hist[1]);
                 let r = d2 / d1;
                 d1 > 0.0
                     && r < 1.0
-                    && d2 < p.h
-                    && d2 * r / (1.0 - r) < p.h
+                    && d2 < p.record_dt
+                    && d2 * r / (1.0 - r) < p.record_dt
                     && p.contacts[c].restitution < 1.0
             };
             captured[k] = p.options.persistent_contact

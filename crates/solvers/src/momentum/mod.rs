@@ -148,13 +148,18 @@ pub fn solve_with_diagnostics(
         .map(|b| format!("{}/{}", b.range.len(), b.available))
         .collect();
     let mut settings = format!(
-        "{} impulse, modes {}, h = {:.4e} s ({} event-check windows per step), persistent contact {}",
+        "{} impulse, modes {}, h = {:.4e} s ({}{} event-check windows per step), persistent contact {}",
         match p.options.impulse {
             ImpulseVariant::Consistent => "consistent",
             ImpulseVariant::Paper => "paper",
         },
         modes.join(" + "),
         p.h,
+        if p.split > 1 {
+            format!("record step in {} parts, ", p.split)
+        } else {
+            String::new()
+        },
         p.sub,
         if p.options.persistent_contact {
             format!("on (capture {:.1e} m/s)", p.options.capture_velocity)
@@ -184,7 +189,6 @@ pub fn solve_with_diagnostics(
             impacts,
             persistent_contacts: phases,
             r_n,
-            warnings: problem.peak_sampling_warning(scene).into_iter().collect(),
             ..RunOutput::on_scene(
                 scene, "momentum", settings, buildings, energy, stats, overlaps,
             )

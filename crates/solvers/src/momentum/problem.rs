@@ -1,7 +1,11 @@
 //! The problem data built from a [`Scene`] (immutable during a run): kept modes,
 //! contacts in modal form, the base grid and its propagators.
 //!
-//! - base step h = record step dt (without a record T_min/8), n_steps = ⌈duration/h⌉;
+//! - base step h = dt/m, the record step dt split in m = ⌈STEPS_PER_PERIOD·dt/T_min⌉ equal
+//!   parts when the shortest kept period T_min is below STEPS_PER_PERIOD record steps (else
+//!   m = 1; without a record h = T_min/8), n_steps = ⌈duration/h⌉. The split is exact (a_g is
+//!   linear within a record step, and the closed form is exact for any step): it is there for
+//!   the continuous peaks, whose check sees one sign change of a rate per step;
 //! - event-check windows per step sub = ⌈8h/T_min⌉ when T_min < 8h (else 1): δ and δ̇ of
 //!   every contact are checked at k·h/sub, so a window holds at most one extremum of δ;
 //! - a_g piecewise linear on the grid, zero past the record (eq. 27's load −Γ_n a_g);
@@ -18,6 +22,12 @@ use crate::SolverError;
 /// Simultaneity window for closures, s.
 pub const SIMULTANEOUS: f64 = 1e-12;
 
+/// Fewest base steps per kept period: a record step longer than T_min/STEPS_PER_PERIOD is split
+/// into equal base steps (see the module docs). The continuous peaks see one sign change of a
+/// rate per step; a mode's rate changes sign every half period, so 2 would do for one mode;
+/// 4 leaves room for sums of modes, whose sign changes can come closer together.
+pub const STEPS_PER_PERIOD: f64 = 4.0;
+
 /// Largest number of event-check windows per record step (memory: `MAX_SUB` × modes × 64
 /// bytes of propagators; work: as many closed-form checks per step and contact).
 pub const MAX_SUB: usize = 4096;
@@ -33,29 +43,6 @@ fn stiffest_mode(modal: &Modal, w: f64) -> (usize, usize) {
         .map_or((1, n + 1), |(i, b)| (i + 1, n - b.range.start + 1))
 }
 
-impl Problem {
-    /// The momentum method's continuous peaks see one sign change of a rate per record step,
-    /// so a kept mode whose period is below two record steps can hide an extremum between
-    /// samples and the peaks can come out low (an audit found 16 % on a stiff roof story under
-    /// a 0.02 s record). The warning, if the shortest kept period is that short.
-    pub fn peak_sampling_warning(&self, scene: &Scene) -> Option<String> {
-        scene.ground.as_ref()?;
-        let w_max = self.modal.omega.iter().cloned().fold(0.0, f64::max);
-        let t_min = 2.0 * std::f64::consts::PI / w_max;
-        if t_min >= 2.0 * self.record_dt {
-            return None;
-        }
-        let (b, n) = stiffest_mode(&self.modal, w_max);
-        Some(format!(
-            "{}'s mode {n} has a period of {t_min:.4} s, shorter than two record steps \
-             ({:.4} s): the momentum method's peaks may be low; resample the record finer or \
-             keep fewer modes (momentum.modes)",
-            scene.buildings[b - 1].name,
-            2.0 * self.record_dt
-        ))
-    }
-}
-
 /// Everything that does not change during a run.
 #[derive(Debug, Clone)]
 pub struct Problem {
@@ -66,10 +53,12 @@ pub struct Problem {
     pub duration: f64,
     /// Record step, s (without a record: T_min/8).
     pub record_dt: f64,
+    /// Base steps per record step m (≥ 1; see [`STEPS_PER_PERIOD`]).
+    pub split: usize,
     /// Event-check windows per step (T_min < 8·h ⇒ ⌈8 h/T_min⌉, else 1): δ and δ̇ are
     /// checked at these interior points so that each window holds at most one extremum.
     pub sub: usize,
-    /// Base step h = record_dt, s (propagation, energy, response sampling).
+    /// Base step h = record_dt/split, s (propagation, energy, response sampling).
     pub h: f64,
     /// Propagators from a step start to its interior check points k·h/sub, k = 1 … sub−1
     /// (per point, per mode: a00 a01 b00 b01 a10 a11 b10 b11).
@@ -105,14 +94,10 @@ impl Problem {
         let w_max = modal.omega.iter().cloned().fold(0.0, f64::max);
         let t_min = 2.0 * std::f64::consts::PI / w_max;
         let record_dt = scene.ground.as_ref().map_or(t_min / 8.0, |g| g.dt);
-        let sub_f = if t_min < 8.0 * record_dt {
-            (8.0 * record_dt / t_min).ceil()
-        } else {
-            1.0
-        };
-        // Refuse, before allocating, what cannot run: the interior check table grows as
-        // record step / shortest period, and the step tables as duration / record step.
-        if !(sub_f <= MAX_SUB as f64) {
+        // Refuse, before allocating, what cannot run: the work per record step (base steps
+        // times interior check windows) grows as record step / shortest period, and the step
+        // tables as duration / base step.
+        if !((8.0 * record_dt / t_min).ceil() <= MAX_SUB as f64) {
             let (b, n) = stiffest_mode(&modal, w_max);
             return Err(SolverError::Refused {
                 reason: format!(
@@ -125,18 +110,27 @@ impl Problem {
                 ),
             });
         }
-        let sub = sub_f as usize;
-        let steps_f = (scene.duration / record_dt).ceil();
+        let split = if scene.ground.is_some() && t_min < STEPS_PER_PERIOD * record_dt {
+            (STEPS_PER_PERIOD * record_dt / t_min).ceil() as usize
+        } else {
+            1
+        };
+        let h = record_dt / split as f64;
+        let sub = if t_min < 8.0 * h {
+            (8.0 * h / t_min).ceil() as usize
+        } else {
+            1
+        };
+        let steps_f = (scene.duration / h).ceil();
         if !(steps_f <= scene.limits.max_steps as f64) {
             return Err(SolverError::Refused {
                 reason: format!(
-                    "analysis.duration = {:.6e} s needs {steps_f:.3e} steps of {record_dt:.3e} s, \
+                    "analysis.duration = {:.6e} s needs {steps_f:.3e} steps of {h:.3e} s, \
                      more than analysis.max_steps = {}",
                     scene.duration, scene.limits.max_steps
                 ),
             });
         }
-        let h = record_dt;
         let checks: Vec<Vec<[f64; 8]>> = (1..sub)
             .map(|k| {
                 let s = h * k as f64 / sub as f64;
@@ -178,9 +172,23 @@ impl Problem {
         let mut ag_start = vec![0.0; n_steps];
         let mut ag_end = vec![0.0; n_steps];
         if let Some(g) = &scene.ground {
-            for j in 0..n_steps.min(g.npts().saturating_sub(1)) {
-                ag_start[j] = g.accel[j];
-                ag_end[j] = g.accel[j + 1];
+            // The record's linear pieces, each cut in `split` equal parts (the ends of a piece
+            // are its samples, exactly; the interior points as `structure::testing::refined`
+            // computes them, so a split record and a record resampled by hand give the same
+            // grid to the last bit).
+            let at = |r: usize, i: usize| {
+                if i == 0 {
+                    g.accel[r]
+                } else if i == split {
+                    g.accel[r + 1]
+                } else {
+                    g.accel[r] + (g.accel[r + 1] - g.accel[r]) * i as f64 / split as f64
+                }
+            };
+            for j in 0..n_steps.min(g.npts().saturating_sub(1) * split) {
+                let (r, i) = (j / split, j % split);
+                ag_start[j] = at(r, i);
+                ag_end[j] = at(r, i + 1);
             }
         }
         let full = StepCoeffs::new(&modal, h);
@@ -200,6 +208,7 @@ impl Problem {
             limits: scene.limits.clone(),
             duration: scene.duration,
             record_dt,
+            split,
             sub,
             h,
             checks,

@@ -92,6 +92,12 @@ impl Study for Gap {
         super::require(ctx, d.gap_max.is_finite() && d.gap_max > 0.0, || {
             format!("`gap_max` = {:?}: expected a gap > 0 (m)", d.gap_max)
         })?;
+        super::require(ctx, (0.0..1.0).contains(&d.damping), || {
+            format!(
+                "`damping` = {:?}: expected a damping ratio 0 <= ζ < 1 (the CQC correlation of the DDC rule)",
+                d.damping
+            )
+        })?;
         let mut v = Vec::new();
         let recs = study_records(ctx, d.records.as_deref(), &d.record_dirs)?;
         record_classes(ctx, &d.record_table, &recs)?;

@@ -30,8 +30,8 @@ use solvers::Method;
 
 use crate::io::{write_atomic, write_json};
 use crate::sweep::{
-    collect, dedup, run_cases, write_cases_table, CaseOutputs, CaseResult, CaseSpec, EngineOptions,
-    Result, Results, RunSummary, Shard, StudyError,
+    collect, dedup, read_case, run_cases, write_cases_table, CaseOutputs, CaseResult, CaseSpec,
+    EngineOptions, Result, Results, RunSummary, Shard, StudyError,
 };
 use crate::table::Table;
 
@@ -327,7 +327,110 @@ pub fn all_cases(st: &dyn Study, ctx: &Ctx) -> Result<Vec<CaseSpec>> {
             })?;
     }
     let baselines: Vec<CaseSpec> = cases.iter().map(|c| c.baseline()).collect();
-    Ok(dedup(cases.into_iter().chain(baselines).collect()))
+    let all = dedup(cases.into_iter().chain(baselines).collect());
+    check_every_case(ctx, &all)?;
+    Ok(all)
+}
+
+/// Every case's scene, with all its overrides, read and validated before anything is
+/// written (no solving): a value the scene refuses in any case (a study's `gap_stiffness =
+/// 0`, a Newmark step longer than one record's step) is bad input naming the case, the key
+/// and the override that set it (exit 2), not a sweep of failed cases (exit 4).
+///
+/// Cheaply, without reading every record once per case: the scene's checks that involve the
+/// record (reading it in its format, scaling it to a PGA, the duration it gives, a Newmark
+/// step against its step) read only the record, whether it is scaled to a PGA, and the
+/// scene's `ground_motion`, `analysis` and `gap_element.{integrator,time_step}` values; its
+/// other checks do not read the record. So each case's overrides (and PGA) are validated
+/// once on one record (the first case with them), and each record once with the overrides
+/// the record checks read ([`reads_record`]); when the latter is refused, every case on
+/// that record is validated in full, so a refusal always names a real case. (A record
+/// check added to the scene that reads other values would need them in [`reads_record`].)
+fn check_every_case(ctx: &Ctx, specs: &[CaseSpec]) -> Result<()> {
+    use std::collections::{BTreeMap, BTreeSet};
+    let pga = |c: &CaseSpec| c.pga.map(f64::to_bits);
+    let mut overrides = BTreeSet::new();
+    for c in specs {
+        if overrides.insert((&c.scene, &c.set, pga(c))) {
+            c.try_scene(&ctx.studies_dir)
+                .map_err(|e| case_refused(ctx, c, e))?;
+        }
+    }
+    // (Whether the record is scaled to a PGA matters to the record checks, not its value.)
+    let mut records: BTreeMap<_, Vec<&CaseSpec>> = BTreeMap::new();
+    for c in specs {
+        let set: Vec<&String> = c.set.iter().filter(|s| reads_record(s)).collect();
+        records
+            .entry((&c.scene, &c.record, c.pga.is_some(), set))
+            .or_default()
+            .push(c);
+    }
+    for ((_, _, _, set), cases) in records {
+        let mut probe = cases[0].clone();
+        probe.set = set.into_iter().cloned().collect();
+        if probe.try_scene(&ctx.studies_dir).is_ok() {
+            continue;
+        }
+        for c in cases {
+            c.try_scene(&ctx.studies_dir)
+                .map_err(|e| case_refused(ctx, c, e))?;
+        }
+    }
+    Ok(())
+}
+
+/// Whether the scene override `expr` (`PATH=VALUE`) sets a value that the scene's record
+/// checks read (see [`check_every_case`]).
+fn reads_record(expr: &str) -> bool {
+    let path = expr.split_once('=').map_or(expr, |(p, _)| p).trim();
+    let under = |root: &str| path == root || path.starts_with(&format!("{root}."));
+    under("ground_motion")
+        || under("analysis")
+        || path == "gap_element"
+        || under("gap_element.integrator")
+        || under("gap_element.time_step")
+}
+
+/// The bad-input error of a case whose scene is refused: the case (id, variant, record),
+/// the scene's message and the case's overrides that set the refused key.
+fn case_refused(ctx: &Ctx, c: &CaseSpec, e: structure::SceneError) -> StudyError {
+    let mut message = format!("case {}", c.id);
+    let variant = c.params.get("variant").and_then(|v| v.as_str());
+    let record = c.record.as_deref().map(record_name);
+    match (variant, record) {
+        (Some(v), Some(r)) => message.push_str(&format!(" ({v}, record {r})")),
+        (Some(v), None) => message.push_str(&format!(" ({v})")),
+        (None, Some(r)) => message.push_str(&format!(" (record {r})")),
+        (None, None) => {}
+    }
+    message.push_str(&format!(": {e}"));
+    if let structure::SceneError::Invalid { key, .. } = &e {
+        // `buildings[0].x` in the scene's message is `buildings.0.x` on an override path.
+        let key = key.replace('[', ".").replace(']', "");
+        let pga = c.pga.map(|p| format!("ground_motion.pga={p:?}"));
+        let set: Vec<&str> = c
+            .set
+            .iter()
+            .map(String::as_str)
+            .chain(pga.as_deref())
+            .filter(|s| {
+                let path = s.split_once('=').map_or(*s, |(p, _)| p).trim();
+                path == key
+                    || key.starts_with(&format!("{path}."))
+                    || path.starts_with(&format!("{key}."))
+            })
+            .collect();
+        if !set.is_empty() {
+            message.push_str(&format!(
+                " (the study sets `{}` for this case)",
+                set.join("`, `")
+            ));
+        }
+    }
+    StudyError::Definition {
+        file: ctx.def_file.clone(),
+        message,
+    }
 }
 
 fn read_definition(cfg: &RunConfig, name: &str) -> Result<(String, String)> {
@@ -459,16 +562,17 @@ fn report(st: &dyn Study, ctx: &Ctx, specs: &[CaseSpec]) -> Result<Vec<String>> 
 }
 
 /// Merges shard outputs: `dirs` are output roots (each with `<study>/manifest.json` and
-/// `<study>/cases/`); case files are gathered into `out`, coverage is checked (an error
-/// lists the missing ids) and the reports are written. Returns the studies merged and the
-/// cases with an unexpected outcome (`study: id: …`).
+/// `<study>/cases/`); coverage is checked (an error lists the missing ids) and every case
+/// file to be used is parsed (an error names a truncated or corrupt one) before anything is
+/// written; then the case files are gathered into `out` and the reports are written.
+/// Returns the studies merged and the cases with an unexpected outcome (`study: id: …`).
 pub fn merge(
     dirs: &[PathBuf],
     out: &Path,
     studies_dir: &Path,
 ) -> Result<(Vec<String>, Vec<String>)> {
-    // First every study's case list and its completeness, so that a missing case of any
-    // study stops the merge before anything is written.
+    // First every study's case list, its completeness and its case files parsed, so that a
+    // missing or damaged case of any study stops the merge before anything is written.
     let mut plans = Vec::new();
     for &name in NAMES.iter().chain(&EXTRA) {
         let manifests: Vec<PathBuf> = dirs
@@ -483,7 +587,7 @@ pub fn merge(
             path: first.display().to_string(),
             message: e.to_string(),
         })?;
-        let m: Manifest = serde_json::from_str(&text).map_err(|e| StudyError::Read {
+        let m: Manifest = serde_json::from_str(&text).map_err(|e| StudyError::Manifest {
             path: first.display().to_string(),
             message: e.to_string(),
         })?;
@@ -525,7 +629,26 @@ pub fn merge(
                 ids: missing.join(", "),
             });
         }
-        plans.push((name, st, m, ctx, specs, dest));
+        // Every case file the merge will use (the output's own, else the first shard's
+        // that has it) is read and parsed now: a truncated or corrupt one stops the merge,
+        // naming the file, before anything is copied or written.
+        let mut copies = Vec::new();
+        for s in &specs {
+            let to = file(&dest, &s.id);
+            let from = if to.is_file() {
+                to.clone()
+            } else {
+                dirs.iter()
+                    .map(|d| file(&d.join(name).join("cases"), &s.id))
+                    .find(|p| p.is_file())
+                    .unwrap_or_else(|| to.clone())
+            };
+            read_case(&from, &s.id)?;
+            if from != to {
+                copies.push((from, to));
+            }
+        }
+        plans.push((name, st, m, ctx, specs, copies));
     }
     if plans.is_empty() {
         return Err(StudyError::NoManifests {
@@ -538,23 +661,14 @@ pub fn merge(
     }
     let mut merged = Vec::new();
     let mut unexpected = Vec::new();
-    for (name, st, m, ctx, specs, dest) in plans {
-        for d in dirs {
-            let src = d.join(name).join("cases");
-            if std::fs::canonicalize(&src).ok() == std::fs::canonicalize(&dest).ok() {
-                continue;
-            }
-            for s in &specs {
-                let from = src.join(format!("{}.json", s.id));
-                let to = dest.join(format!("{}.json", s.id));
-                if !to.is_file() && from.is_file() {
-                    let bytes = std::fs::read(&from).map_err(|e| StudyError::Read {
-                        path: from.display().to_string(),
-                        message: e.to_string(),
-                    })?;
-                    write_atomic(&to, &bytes)?;
-                }
-            }
+    for (name, st, m, ctx, specs, copies) in plans {
+        // (A case already in the output, e.g. when it is one of the shards, is not copied.)
+        for (from, to) in &copies {
+            let bytes = std::fs::read(from).map_err(|e| StudyError::Read {
+                path: from.display().to_string(),
+                message: e.to_string(),
+            })?;
+            write_atomic(to, &bytes)?;
         }
         write_json(
             &ctx.dir.join("manifest.json"),

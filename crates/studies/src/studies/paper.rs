@@ -130,6 +130,12 @@ fn history_case(ctx: &Ctx, d: &Def, v: Variant) -> CaseSpec {
 impl Study for Paper {
     fn cases(&self, ctx: &Ctx) -> Result<Vec<CaseSpec>> {
         let d: Def = ctx.def()?;
+        super::require(ctx, (0.0..1.0).contains(&d.spectrum_damping), || {
+            format!(
+                "`spectrum_damping` = {:?}: expected a damping ratio 0 <= ζ < 1 (Figure 1's spectrum)",
+                d.spectrum_damping
+            )
+        })?;
         let mut v = Vec::new();
         for &gap in &d.gaps {
             for var in x_variants(&d) {

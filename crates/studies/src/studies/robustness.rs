@@ -37,9 +37,13 @@ fn records(ctx: &Ctx, d: &Def) -> Result<Vec<String>> {
     let dirs: &[String] = if out.is_empty() { &d.record_dirs } else { &[] };
     for dir in dirs {
         let full = ctx.studies_dir.join(dir);
-        let rd = std::fs::read_dir(&full).map_err(|e| StudyError::Read {
-            path: full.display().to_string(),
-            message: e.to_string(),
+        // A folder named by the definition that cannot be listed is bad input (exit 2).
+        let rd = std::fs::read_dir(&full).map_err(|e| StudyError::Definition {
+            file: ctx.def_file.clone(),
+            message: format!(
+                "`record_dirs`: {} cannot be listed ({e}); expected a folder of *.AT2 records, relative to the study's folder",
+                full.display()
+            ),
         })?;
         let mut names: Vec<String> = rd
             .filter_map(|e| e.ok())
@@ -95,6 +99,21 @@ fn case(ctx: &Ctx, d: &Def, rec: &str, method: usize, gap: f64, cr: f64) -> Case
 impl Study for Robustness {
     fn cases(&self, ctx: &Ctx) -> Result<Vec<CaseSpec>> {
         let d: Def = ctx.def()?;
+        super::require(
+            ctx,
+            !d.gaps.is_empty() && d.gaps.iter().all(|g| *g >= 0.0),
+            || format!("`gaps` = {:?}: expected at least one gap >= 0 (m)", d.gaps),
+        )?;
+        super::require(
+            ctx,
+            !d.restitution.is_empty() && d.restitution.iter().all(|c| (0.0..=1.0).contains(c)),
+            || {
+                format!(
+                    "`restitution` = {:?}: expected at least one value in [0, 1]",
+                    d.restitution
+                )
+            },
+        )?;
         let (gaps, crs) = grid(ctx, &d);
         let mut v = Vec::new();
         for rec in records(ctx, &d)? {
