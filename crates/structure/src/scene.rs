@@ -1445,6 +1445,10 @@ fn validate(
         gap.time_step = dt;
     }
     // A fixed step longer than the record's step skips record points (and impacts).
+    // (A check that reads the record must read only `ground_motion.*`, `analysis.*` and
+    // `gap_element.{integrator,time_step}` besides it: the studies check every case cheaply on
+    // that assumption, `studies::studies::reads_record`; a new one reading other keys must be
+    // added there.)
     if gap.integrator == Integrator::Newmark {
         if let Some(g) = &ground {
             if gap.time_step > g.dt * (1.0 + 1e-9) {

@@ -216,7 +216,9 @@ enum MethodArg {
 /// A number for a message or a period column: as written for everyday magnitudes, in exponent
 /// form otherwise (`1e-160` or `1e300`, not hundreds of digits).
 fn short(x: f64) -> String {
-    if x == 0.0 || (1e-3..1e6).contains(&x.abs()) {
+    if x == 0.0 {
+        "0".into()
+    } else if (1e-3..1e6).contains(&x.abs()) {
         format!("{x}")
     } else {
         format!("{x:e}")

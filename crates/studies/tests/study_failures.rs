@@ -405,6 +405,12 @@ fn empty_or_degenerate_study_grids_are_refused() {
         ("robustness", "gaps", "gaps = []", "at least one gap"),
         (
             "robustness",
+            "record_dirs",
+            "record_dirs = []",
+            "no *.AT2 record",
+        ),
+        (
+            "robustness",
             "restitution",
             "restitution = [1.5]",
             "in [0, 1]",

@@ -12,15 +12,16 @@
 //! **Between events** a_g is piecewise linear on the record grid and every mode is
 //! propagated exactly (Nigam–Jennings, [`modal`]): over a full step of length h,
 //! (q, q̇)ₖ₊₁ = A(h)(q, q̇)ₖ + B(h)(f(tₖ), f(tₖ₊₁)) with A, B constant per mode (computed
-//! once, [`modal::StepCoeffs`]: no trigonometric function per step). The grid is the
-//! record step `dt`; when the shortest kept period T_min < 8 dt the event check looks at
-//! `sub = ⌈8 dt / T_min⌉` windows per step (δ, δ̇ at the interior points from precomputed
-//! partial propagators) so that each window holds at most one extremum of a gap function.
-//! Past the record end a_g = 0 and the same grid continues to the analysis duration.
-//! Without a record the grid is T_min/8.
+//! once, [`modal::StepCoeffs`]: no trigonometric function per step). The base step h is the
+//! record step `dt`, split into m = ⌈4 dt / T_min⌉ equal parts when the shortest kept period
+//! T_min < 4 dt ([`problem::STEPS_PER_PERIOD`]: the peaks see one sign change per step; the
+//! split is exact); when T_min < 8 h the event check looks at `sub = ⌈8 h / T_min⌉` windows
+//! per step (δ, δ̇ at the interior points from precomputed partial propagators) so that each
+//! window holds at most one extremum of a gap function. Past the record end a_g = 0 and the
+//! same grid continues to the analysis duration. Without a record the grid is T_min/8.
 //!
 //! **Peaks** ([`peaks`]) are continuous maxima, not samples: floor displacements
-//! u = Φq (eq. 26) and story shears k_j (u_j − u_{j−1}) are observed at every record point
+//! u = Φq (eq. 26) and story shears k_j (u_j − u_{j−1}) are observed at every base step
 //! and event instant, and an extremum between two samples (a sign change of ẏ) is refined
 //! on the closed form (deferred to the end of the run, only where it can be the peak).
 //! A building whose energy envelope cannot reach any of its peaks over an interval is not
@@ -54,7 +55,8 @@
 //! 1 mm) m, so a touching pair is never found closing again and again at one state.
 //!
 //! **Chattering** ([`persistent`]): when (c_r < 1) the impact intervals on a contact shrink
-//! geometrically with a remaining accumulation time below one sub-step, and
+//! geometrically with a remaining accumulation time below one record step (the record's,
+//! not the split base step, so that the split does not change what counts as chattering), and
 //! `persistent_contact` is on, a plastic impulse (v⁺ = 0) starts a persistent-contact phase:
 //! the floors move together. The phase ends where the instantaneous holding force turns
 //! tensile, located by Brent's method (see [`persistent`]). With `persistent_contact =
@@ -62,7 +64,8 @@
 //! accumulation point, [`SolverError::Stalled`].
 //!
 //! **Refused scenes**: before anything is allocated, a scene whose shortest kept period
-//! needs more than [`problem::MAX_SUB`] check windows per record step, or whose duration
+//! needs more than [`problem::MAX_SUB`] contact checks per record step (base steps times
+//! check windows, about 8 dt/T_min), or whose duration
 //! needs more than `analysis.max_steps` steps, is refused ([`SolverError::Refused`]).
 //!
 //! **Energy** ([`energy`]): input, damping, impact losses, final, balance error.

@@ -5,7 +5,8 @@
 //!
 //! At each sample the solver knows y and ẏ (ẏ = Σ c_n q̇_n) at both ends of the interval just
 //! integrated. A sign change of ẏ means an interior extremum (intervals are at most one
-//! record step, shorter than the shortest periods that matter: at most one extremum of the
+//! base step, at most a quarter of the shortest kept period since record steps longer than
+//! that are split ([`super::problem::STEPS_PER_PERIOD`]): at most one extremum of the
 //! quantity). Its value is estimated by the cubic Hermite interpolant H of (y, ẏ) at the
 //! ends; when that estimate could raise the running peak (|H| ≥ 0.9 × peak and |H| plus the
 //! bound len⁴/384 · Σ|c_n| ω_n⁴ |A_n − iB_n| on |y − H| reaches the peak), the

@@ -1,6 +1,6 @@
 //! Persistent contact: the two floors move together (δ = 0) until the force would pull.
 //!
-//! The contact forces λ_a ≥ 0 are taken constant over each segment (record sub-step or
+//! The contact forces λ_a ≥ 0 are taken constant over each segment (base step or
 //! partial segment). The exact solution is linear in λ, so the gap at the segment end is
 //! δ_end = δ_free − C λ with C_ab = Σ_n g_a,n g_b,n χ_n(τ), χ_n(τ) the displacement of mode
 //! n at τ under a unit constant load from rest. Solving C λ = δ_free keeps δ = 0 at every

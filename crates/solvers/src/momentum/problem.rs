@@ -28,8 +28,10 @@ pub const SIMULTANEOUS: f64 = 1e-12;
 /// 4 leaves room for sums of modes, whose sign changes can come closer together.
 pub const STEPS_PER_PERIOD: f64 = 4.0;
 
-/// Largest number of event-check windows per record step (memory: `MAX_SUB` × modes × 64
-/// bytes of propagators; work: as many closed-form checks per step and contact).
+/// Largest number of contact checks per record step: base steps per record step times
+/// event-check windows per base step, about 8 dt/T_min (work: as many closed-form checks per
+/// record step and contact; the split keeps the windows per base step at 2 or fewer, so the
+/// propagator tables stay small).
 pub const MAX_SUB: usize = 4096;
 
 /// (building, mode) numbers (from 1) of the mode with circular frequency `w`.

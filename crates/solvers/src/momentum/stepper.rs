@@ -43,7 +43,7 @@ pub struct State {
 /// What one call of [`Stepper::advance`] did.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Step {
-    /// Reached the end of the segment (a record sub-step point or the analysis end).
+    /// Reached the end of the segment (a base-step point or the analysis end).
     Reached,
     /// These contacts close at `time` (state is at `time`, before the impulse).
     ContactClosed { contacts: Vec<usize>, time: f64 },

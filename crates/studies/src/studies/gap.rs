@@ -77,8 +77,12 @@ fn gel(ctx: &Ctx, d: &Def, rec: &str, gap: f64) -> CaseSpec {
         .param("variant", format!("gap element k = {:e}", d.gap_stiffness))
 }
 
-/// CQC correlation coefficient of two modes with equal damping ζ and frequency ratio r.
+/// CQC correlation coefficient of two modes with equal damping ζ and frequency ratio r
+/// (1 at r = 1 for any ζ, the limit of the formula, which reads 0/0 there when ζ = 0).
 pub fn cqc_rho(zeta: f64, r: f64) -> f64 {
+    if r == 1.0 {
+        return 1.0;
+    }
     let z2 = zeta * zeta;
     8.0 * z2 * (1.0 + r) * r.powf(1.5) / ((1.0 - r * r).powi(2) + 4.0 * z2 * r * (1.0 + r).powi(2))
 }
@@ -581,5 +585,25 @@ impl Study for Gap {
                 "Contact-story amplification against the gap, pulse vs no pulse, and the separation rules",
             )],
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::cqc_rho;
+
+    /// ρ = 1 for equal frequencies (also undamped, where the formula reads 0/0), symmetric in
+    /// r ↔ 1/r, 0 for distinct undamped modes, and Der Kiureghian's closed form
+    /// 8ζ²(1+r)r^1.5 / ((1−r²)² + 4ζ²r(1+r)²) at ζ = 0.05, r = 0.8.
+    #[test]
+    fn cqc_correlation() {
+        assert_eq!(cqc_rho(0.0, 1.0), 1.0);
+        assert_eq!(cqc_rho(0.05, 1.0), 1.0);
+        let r: f64 = 0.8;
+        let z2: f64 = 0.05 * 0.05;
+        let expect = 8.0 * z2 * 1.8 * r.powf(1.5) / (0.36f64.powi(2) + 4.0 * z2 * 0.8 * 3.24);
+        assert!((cqc_rho(0.05, r) - expect).abs() <= 4.0 * f64::EPSILON * expect);
+        assert!((cqc_rho(0.05, 0.8) - cqc_rho(0.05, 1.25)).abs() < 1e-12);
+        assert_eq!(cqc_rho(0.0, 0.8), 0.0);
     }
 }

@@ -312,20 +312,6 @@ pub fn all_cases(st: &dyn Study, ctx: &Ctx) -> Result<Vec<CaseSpec>> {
             });
         }
     }
-    // Every record (a study's own or `--records`) is read and scaled once before anything
-    // runs, with the overrides of the first case that uses it: a record that cannot be read
-    // or scaled is bad input (exit 2, file and line named), not a sweep of failed cases.
-    let mut seen = std::collections::BTreeSet::new();
-    for c in cases.iter().filter(|c| seen.insert(c.record.clone())) {
-        c.load_scene(&ctx.studies_dir)
-            .map_err(|message| StudyError::Definition {
-                file: ctx.def_file.clone(),
-                message: match &c.record {
-                    Some(r) => format!("record {r}: {message}"),
-                    None => message,
-                },
-            })?;
-    }
     let baselines: Vec<CaseSpec> = cases.iter().map(|c| c.baseline()).collect();
     let all = dedup(cases.into_iter().chain(baselines).collect());
     check_every_case(ctx, &all)?;

@@ -53,6 +53,12 @@ fn records(ctx: &Ctx, d: &Def) -> Result<Vec<String>> {
         names.sort();
         out.extend(names.into_iter().map(|n| format!("{dir}/{n}")));
     }
+    super::require(ctx, !out.is_empty(), || {
+        format!(
+            "`record_dirs` = {:?}: no *.AT2 record in them; expected at least one record",
+            d.record_dirs
+        )
+    })?;
     if ctx.opts.quick {
         out.truncate(3);
     }
