@@ -187,10 +187,20 @@ impl Problem {
                     g.accel[r] + (g.accel[r + 1] - g.accel[r]) * i as f64 / split as f64
                 }
             };
-            for j in 0..n_steps.min(g.npts().saturating_sub(1) * split) {
-                let (r, i) = (j / split, j % split);
-                ag_start[j] = at(r, i);
-                ag_end[j] = at(r, i + 1);
+            let covered = n_steps.min(g.npts().saturating_sub(1) * split);
+            if split == 1 {
+                // The record's own grid (the common case): its samples as they are.
+                ag_start[..covered].copy_from_slice(&g.accel[..covered]);
+                ag_end[..covered].copy_from_slice(&g.accel[1..covered + 1]);
+            } else {
+                let pieces = ag_start[..covered]
+                    .chunks_mut(split)
+                    .zip(ag_end[..covered].chunks_mut(split));
+                for (r, (starts, ends)) in pieces.enumerate() {
+                    for (i, (a0, a1)) in starts.iter_mut().zip(ends.iter_mut()).enumerate() {
+                        (*a0, *a1) = (at(r, i), at(r, i + 1));
+                    }
+                }
             }
         }
         let full = StepCoeffs::new(&modal, h);
