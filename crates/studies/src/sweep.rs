@@ -755,9 +755,7 @@ pub fn read_case(path: &Path, id: &str) -> Result<CaseResult> {
 
 /// Reads a finished case, if its file exists and parses.
 pub fn load_case(study_dir: &Path, id: &str) -> Option<CaseResult> {
-    let text = std::fs::read_to_string(case_path(study_dir, id)).ok()?;
-    let r: CaseResult = serde_json::from_str(&text).ok()?;
-    (r.spec.id == id).then_some(r)
+    read_case(&case_path(study_dir, id), id).ok()
 }
 
 /// Removes duplicate ids, keeping the first occurrence (order preserved).

@@ -20,6 +20,23 @@ fn scene() -> String {
     .to_string()
 }
 
+/// `pound run` of the paper scene with the momentum method over its first second, without
+/// the baseline run, and `extra` arguments.
+fn paper_momentum(extra: &[&str]) -> std::process::Output {
+    let s = scene();
+    let mut a = vec![
+        "run",
+        s.as_str(),
+        "--method",
+        "momentum",
+        "--no-baseline",
+        "--set",
+        "analysis.duration=1",
+    ];
+    a.extend_from_slice(extra);
+    pound(&a)
+}
+
 /// Runs pound, expects exit 2 with every fragment on stderr, nothing on stdout.
 #[track_caller]
 fn refused(args: &[&str], expect: &[&str]) -> String {
@@ -145,17 +162,7 @@ fn scene_values_that_used_to_be_repeated_clamped_or_skipped() {
         &["gap_element.time_step", "0.005"],
     );
     // A mode count above the floors is clamped, as users expect, and said on stderr.
-    let o = pound(&[
-        "run",
-        &s,
-        "--method",
-        "momentum",
-        "--set",
-        "momentum.modes=99",
-        "--set",
-        "analysis.duration=1",
-        "--no-baseline",
-    ]);
+    let o = paper_momentum(&["--set", "momentum.modes=99"]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{err}");
     assert!(
@@ -244,17 +251,7 @@ fn directories_and_os_errors() {
     let e = refused(&["record", "/no/such/file.AT2"], &["no such file"]);
     assert_eq!(e.matches("os error").count(), 0, "{e}");
     // An output that cannot be written: the OS error once.
-    let o = pound(&[
-        "run",
-        &scene(),
-        "--method",
-        "momentum",
-        "--set",
-        "analysis.duration=1",
-        "--no-baseline",
-        "--out",
-        "/proc/pound-cannot-write.json",
-    ]);
+    let o = paper_momentum(&["--out", "/proc/pound-cannot-write.json"]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{err}");
     assert_eq!(err.matches("os error").count(), 1, "{err}");
@@ -450,16 +447,7 @@ fn messages_that_say_what_to_do() {
     // An output path below a file.
     let file = d.write("afile", "");
     let target = file.join("r.json");
-    let o = pound(&[
-        "run",
-        &scene(),
-        "--method",
-        "momentum",
-        "--set",
-        "analysis.duration=1",
-        "--out",
-        target.to_str().unwrap(),
-    ]);
+    let o = paper_momentum(&["--out", target.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(1));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("afile is a file, not a folder"), "{err}");
@@ -508,21 +496,8 @@ fn undefined_amplification_is_not_inf() {
 /// (not on the paper scene).
 #[test]
 fn a_record_step_long_against_the_shortest_period_is_split() {
-    let s = scene();
     let run = |extra: &[&str]| {
-        let mut a = vec![
-            "run",
-            s.as_str(),
-            "--method",
-            "momentum",
-            "--no-baseline",
-            "--set",
-            "analysis.duration=1",
-            "--out",
-            "-",
-        ];
-        a.extend_from_slice(extra);
-        let o = pound(&a);
+        let o = paper_momentum(&[&["--out", "-"], extra].concat());
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
         v["settings"].as_str().unwrap().to_string()

@@ -112,7 +112,8 @@ impl Problem {
                 ),
             });
         }
-        let split = if scene.ground.is_some() && t_min < STEPS_PER_PERIOD * record_dt {
+        // (Without a record, record_dt = T_min/8: never split.)
+        let split = if t_min < STEPS_PER_PERIOD * record_dt {
             (STEPS_PER_PERIOD * record_dt / t_min).ceil() as usize
         } else {
             1
@@ -174,25 +175,25 @@ impl Problem {
         let mut ag_start = vec![0.0; n_steps];
         let mut ag_end = vec![0.0; n_steps];
         if let Some(g) = &scene.ground {
-            // The record's linear pieces, each cut in `split` equal parts (the ends of a piece
-            // are its samples, exactly; the interior points as `structure::testing::refined`
-            // computes them, so a split record and a record resampled by hand give the same
-            // grid to the last bit).
-            let at = |r: usize, i: usize| {
-                if i == 0 {
-                    g.accel[r]
-                } else if i == split {
-                    g.accel[r + 1]
-                } else {
-                    g.accel[r] + (g.accel[r + 1] - g.accel[r]) * i as f64 / split as f64
-                }
-            };
             let covered = n_steps.min(g.npts().saturating_sub(1) * split);
             if split == 1 {
                 // The record's own grid (the common case): its samples as they are.
                 ag_start[..covered].copy_from_slice(&g.accel[..covered]);
                 ag_end[..covered].copy_from_slice(&g.accel[1..covered + 1]);
             } else {
+                // The record's linear pieces, each cut in `split` equal parts (the ends of a
+                // piece are its samples, exactly; the interior points as
+                // `structure::testing::refined` computes them, so a split record and a record
+                // resampled by hand give the same grid to the last bit).
+                let at = |r: usize, i: usize| {
+                    if i == 0 {
+                        g.accel[r]
+                    } else if i == split {
+                        g.accel[r + 1]
+                    } else {
+                        g.accel[r] + (g.accel[r + 1] - g.accel[r]) * i as f64 / split as f64
+                    }
+                };
                 let pieces = ag_start[..covered]
                     .chunks_mut(split)
                     .zip(ag_end[..covered].chunks_mut(split));

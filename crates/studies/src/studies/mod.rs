@@ -30,8 +30,8 @@ use solvers::Method;
 
 use crate::io::{write_atomic, write_json};
 use crate::sweep::{
-    collect, dedup, read_case, run_cases, write_cases_table, CaseOutputs, CaseResult, CaseSpec,
-    EngineOptions, Result, Results, RunSummary, Shard, StudyError,
+    case_path, collect, dedup, read_case, run_cases, write_cases_table, CaseOutputs, CaseResult,
+    CaseSpec, EngineOptions, Result, Results, RunSummary, Shard, StudyError,
 };
 use crate::table::Table;
 
@@ -595,18 +595,28 @@ pub fn merge(
             &m.options,
         )?;
         let specs = all_cases(st, &ctx)?;
-        let dest = out.join(name).join("cases");
-        let file = |dir: &Path, id: &str| dir.join(format!("{id}.json"));
-        let missing: Vec<String> = specs
-            .iter()
-            .filter(|s| {
-                !file(&dest, &s.id).is_file()
-                    && !dirs
-                        .iter()
-                        .any(|d| file(&d.join(name).join("cases"), &s.id).is_file())
-            })
-            .map(|s| s.id.clone())
-            .collect();
+        // Every case's file: the output's own, else the first shard's that has it. A case
+        // with none is missing; every file found is read and parsed now, so a truncated or
+        // corrupt one stops the merge, naming it, before anything is copied or written.
+        let dest = out.join(name);
+        let mut missing = Vec::new();
+        let mut copies = Vec::new();
+        for s in &specs {
+            let to = case_path(&dest, &s.id);
+            let from = std::iter::once(dest.clone())
+                .chain(dirs.iter().map(|d| d.join(name)))
+                .map(|d| case_path(&d, &s.id))
+                .find(|p| p.is_file());
+            match from {
+                None => missing.push(s.id.clone()),
+                Some(from) => {
+                    read_case(&from, &s.id)?;
+                    if from != to {
+                        copies.push((from, to));
+                    }
+                }
+            }
+        }
         if !missing.is_empty() {
             return Err(StudyError::Incomplete {
                 study: name.into(),
@@ -614,25 +624,6 @@ pub fn merge(
                 total: specs.len(),
                 ids: missing.join(", "),
             });
-        }
-        // Every case file the merge will use (the output's own, else the first shard's
-        // that has it) is read and parsed now: a truncated or corrupt one stops the merge,
-        // naming the file, before anything is copied or written.
-        let mut copies = Vec::new();
-        for s in &specs {
-            let to = file(&dest, &s.id);
-            let from = if to.is_file() {
-                to.clone()
-            } else {
-                dirs.iter()
-                    .map(|d| file(&d.join(name).join("cases"), &s.id))
-                    .find(|p| p.is_file())
-                    .unwrap_or_else(|| to.clone())
-            };
-            read_case(&from, &s.id)?;
-            if from != to {
-                copies.push((from, to));
-            }
         }
         plans.push((name, st, m, ctx, specs, copies));
     }
