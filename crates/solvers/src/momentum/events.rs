@@ -108,7 +108,7 @@ impl Locator<'_> {
             if *g != 0.0 {
                 let t = TrigMemo::get(self.arcs, self.memo, n, s);
                 d += g * if velocity {
-                    a.v_from(t)
+                    a.v_from(s, t)
                 } else {
                     a.x_from(s, t)
                 };

@@ -69,9 +69,8 @@ pub fn arcs_of(
     range
         .map(|n| {
             let extra = fc.map_or(0.0, |f| f[n]);
-            Arc::new(
-                modal.omega[n],
-                modal.zeta[n],
+            modal.arc(
+                n,
                 x0[n],
                 v0[n],
                 -modal.gamma[n] * a0 + extra,

@@ -142,9 +142,8 @@ impl Stepper<'_> {
             p.ground(self.s.j, self.s.t + s),
         );
         let arc = |n: usize, extra: f64| {
-            Arc::new(
-                m.omega[n],
-                m.zeta[n],
+            m.arc(
+                n,
                 self.s.x[n],
                 self.s.v[n],
                 -m.gamma[n] * a0 + extra,

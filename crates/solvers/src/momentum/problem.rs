@@ -87,7 +87,7 @@ pub struct Problem {
 
 impl Problem {
     pub fn new(scene: &Scene) -> Result<Problem, SolverError> {
-        let modal = Modal::new(&scene.buildings, scene.momentum.modes)?;
+        let mut modal = Modal::new(&scene.buildings, scene.momentum.modes)?;
         let contacts: Vec<ContactGeom> = scene
             .contacts
             .iter()
@@ -119,6 +119,7 @@ impl Problem {
             1
         };
         let h = record_dt / split as f64;
+        modal.set_base_step(h);
         let sub = if t_min < 8.0 * h {
             (8.0 * h / t_min).ceil() as usize
         } else {

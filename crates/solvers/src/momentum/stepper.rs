@@ -981,15 +981,8 @@ impl<'a> Stepper<'a> {
         for n in 0..m.len() {
             let extra = fc.map_or(0.0, |f| f[n]);
             let (f0, f1) = (-m.gamma[n] * a0 + extra, -m.gamma[n] * a1 + extra);
-            self.arcs.push(Arc::new(
-                m.omega[n],
-                m.zeta[n],
-                self.s.x[n],
-                self.s.v[n],
-                f0,
-                f1,
-                tau,
-            ));
+            self.arcs
+                .push(m.arc(n, self.s.x[n], self.s.v[n], f0, f1, tau));
         }
         self.lanes.set(&self.arcs);
     }
