@@ -119,6 +119,27 @@ pub fn json_text<T: serde::Serialize>(value: &T, what: &str) -> Result<String, O
     Ok(s)
 }
 
+/// The history rows written with `--history-dt every` (all without it): the first sample,
+/// the first sample at or after each later multiple of `every` (a sample within 1e-9·every
+/// below a multiple counts as on it: record points are sums of steps), and the last sample.
+/// The samples are the record points and event instants, so a row falls on a multiple only
+/// where a sample does.
+pub fn history_rows(time: &[f64], every: Option<f64>) -> Vec<usize> {
+    let Some(dt) = every else {
+        return (0..time.len()).collect();
+    };
+    let tol = 1e-9 * dt;
+    let mut rows = Vec::new();
+    let mut next = f64::NEG_INFINITY;
+    for (s, &t) in time.iter().enumerate() {
+        if t >= next - tol || s + 1 == time.len() {
+            rows.push(s);
+            next = (((t + tol) / dt).floor() + 1.0) * dt;
+        }
+    }
+    rows
+}
+
 /// CSV text of a history, one row per sample (record points and event instants, so the
 /// grid is not uniform). Columns, every header quoted, buildings as named in the scene,
 /// floors and stories counted from 1, contacts from 0 as in the JSON:
@@ -134,7 +155,11 @@ pub fn json_text<T: serde::Serialize>(value: &T, what: &str) -> Result<String, O
 /// `<building>_V<story>_N` = k_j (u_j − u_{j−1}) (a yielding building: the story law's force,
 /// as recorded by the solver, which the accelerations use too); contact forces
 /// `contact<i>_force_N` (compressive > 0).
-pub fn history_csv(scene: &Scene, history: &History) -> Result<String, OutputError> {
+pub fn history_csv(
+    scene: &Scene,
+    history: &History,
+    every: Option<f64>,
+) -> Result<String, OutputError> {
     let csv_err = |e: csv::Error| OutputError::Io {
         path: "history".into(),
         error: std::io::Error::other(e.to_string()),
@@ -184,7 +209,8 @@ pub fn history_csv(scene: &Scene, history: &History) -> Result<String, OutputErr
         .collect();
     let fmt = |x: f64| format!("{x:.9e}");
     let nc = scene.contacts.len();
-    for (s, &t) in history.time.iter().enumerate() {
+    for s in history_rows(&history.time, every) {
+        let t = history.time[s];
         let u = &history.displacement[s];
         let v = history.velocity.get(s).map(|r| r.as_slice()).unwrap_or(&[]);
         let fc = history

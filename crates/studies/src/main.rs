@@ -82,6 +82,10 @@ enum Command {
         /// Write floor displacements and story shears over time as CSV here.
         #[arg(long)]
         history: Option<PathBuf>,
+        /// With --history: one row per this many seconds (the first sample at or after each
+        /// multiple, and the last) instead of every sample.
+        #[arg(long, value_name = "SECONDS", requires = "history")]
+        history_dt: Option<f64>,
         /// Skip the run without contact that gives the amplification factors.
         #[arg(long)]
         no_baseline: bool,
@@ -505,8 +509,16 @@ fn run(cli: Cli) -> Result<()> {
             set,
             out,
             history,
+            history_dt,
             no_baseline,
         } => {
+            if let Some(dt) = history_dt {
+                if !(dt.is_finite() && dt > 0.0) {
+                    return Err(input(format!(
+                        "--history-dt {dt}: expected a positive number of seconds"
+                    )));
+                }
+            }
             if let (Some(o), Some(h)) = (&out, &history) {
                 if same_file(o, h) {
                     return Err(input(format!(
@@ -564,7 +576,10 @@ fn run(cli: Cli) -> Result<()> {
             // (a file that was there before is left as it was).
             let mut files: Vec<(PathBuf, Vec<u8>)> = Vec::new();
             if let (Some(p), Some(h)) = (&history, &hist) {
-                files.push((p.clone(), io::history_csv(&scene, h)?.into_bytes()));
+                files.push((
+                    p.clone(),
+                    io::history_csv(&scene, h, history_dt)?.into_bytes(),
+                ));
             }
             let mut stdout_json = None;
             if let Some(p) = &out {

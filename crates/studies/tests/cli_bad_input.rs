@@ -1174,6 +1174,28 @@ fn out_and_history_on_one_file_are_refused() {
     assert_bad(&a, &["the same file"], &[&f]);
 }
 
+/// `--history-dt` must be a positive, finite number of seconds, and needs `--history`:
+/// refused before the analysis runs, nothing written.
+#[test]
+fn history_dt_must_be_positive_and_needs_a_history() {
+    let d = TempDir::new("historydt");
+    let scene = d.write("scene.toml", &base_scene());
+    let (json, hist) = (d.path("out.json"), d.path("history.csv"));
+    for v in ["0", "-0.01", "nan", "inf"] {
+        let mut a = run_args(&scene, &json, &hist, &[]);
+        a.push(format!("--history-dt={v}"));
+        assert_bad(
+            &a,
+            &["--history-dt", "expected a positive number of seconds"],
+            &[&json, &hist],
+        );
+    }
+    let a: Vec<String> = ["run", &s(&scene), "--method", "gap", "--history-dt", "0.1"]
+        .map(String::from)
+        .to_vec();
+    assert_bad(&a, &["--history"], &[&json, &hist]);
+}
+
 /// `--records` with a study that runs one fixed scene and record (the paper's example, the
 /// cost and stability scenes) is refused, naming the study and those that take records,
 /// before anything is written; the record-based study named beside it does not run either.

@@ -290,6 +290,51 @@ impl Csv {
     }
 }
 
+/// `--history-dt 0.05`: the first sample, the first sample at or after each multiple of
+/// 0.05 s and the last one, each the very row of the full history (the momentum method
+/// splits this stiffer pair's 5 ms record steps in parts and samples each part).
+#[test]
+fn history_dt_keeps_one_row_per_interval() {
+    let d = TempDir::new("historydt");
+    let (full, every) = (d.path("full.csv"), d.path("every.csv"));
+    let stiff = "buildings.0.target_frequencies_hz=[4.0, 12.0]";
+    for (path, extra) in [(&full, vec![]), (&every, vec!["--history-dt", "0.05"])] {
+        let mut a = vec!["--set", stiff, "--history", path.to_str().unwrap()];
+        a.extend(extra);
+        let o = run_momentum(&scene(), "3", &a);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    let lines = |p: &std::path::Path| -> Vec<String> {
+        std::fs::read_to_string(p)
+            .unwrap()
+            .lines()
+            .map(String::from)
+            .collect()
+    };
+    let (all, kept) = (lines(&full), lines(&every));
+    assert_eq!(all[0], kept[0], "header");
+    let time = |l: &String| l.split(',').next().unwrap().parse::<f64>().unwrap();
+    let times: Vec<f64> = all[1..].iter().map(time).collect();
+    // The split: more than one sample per record step.
+    assert!(times.len() > 2 * 600, "{} samples", times.len());
+    let mut want = vec![1];
+    for k in 1..=60 {
+        let mark = k as f64 * 0.05;
+        if let Some(i) = times.iter().position(|&t| t >= mark - 1e-9 * 0.05) {
+            if !want.contains(&(i + 1)) {
+                want.push(i + 1);
+            }
+        }
+    }
+    if !want.contains(&(all.len() - 1)) {
+        want.push(all.len() - 1);
+    }
+    let expect: Vec<&String> = want.iter().map(|&i| &all[i]).collect();
+    let got: Vec<&String> = kept[1..].iter().collect();
+    assert_eq!(got.len(), 61, "rows at 0, 0.05, …, 3 s");
+    assert_eq!(got, expect);
+}
+
 /// The history CSV: quoted headers, every quantity the README lists, and a state that is
 /// consistent with itself: drift and shear from the displacements, the contact force of
 /// the linear law, and the equilibrium accelerations equal to the time derivative of the
