@@ -839,17 +839,27 @@ fn studies_command(command: StudiesCommand) -> Result<()> {
             let out = out.unwrap_or_else(|| dirs[0].clone());
             // A shard missing, a case file that does not parse, or folders without
             // manifests, is bad input (exit 2); the checks come before anything is written.
-            let (merged, unexpected) =
-                st::merge(&dirs, &out, &studies_dir).map_err(|e| match e {
-                    studies::sweep::StudyError::Incomplete { .. }
-                    | studies::sweep::StudyError::CaseFile { .. }
-                    | studies::sweep::StudyError::Manifest { .. }
-                    | studies::sweep::StudyError::Definition { .. }
-                    | studies::sweep::StudyError::NoManifests { .. } => input(e),
-                    e => anyhow::Error::new(e),
-                })?;
-            eprintln!("merged {} into {}", merged.join(", "), out.display());
-            failed_cases(&unexpected)?;
+            let merged = st::merge(&dirs, &out, &studies_dir).map_err(|e| match e {
+                studies::sweep::StudyError::Incomplete { .. }
+                | studies::sweep::StudyError::CaseFile { .. }
+                | studies::sweep::StudyError::Manifest { .. }
+                | studies::sweep::StudyError::Definition { .. }
+                | studies::sweep::StudyError::NoManifests { .. } => input(e),
+                e => anyhow::Error::new(e),
+            })?;
+            for (bad, good) in &merged.damaged {
+                eprintln!(
+                    "note: {} is not a usable case file: {} used instead",
+                    bad.display(),
+                    good.display()
+                );
+            }
+            eprintln!(
+                "merged {} into {}",
+                merged.studies.join(", "),
+                out.display()
+            );
+            failed_cases(&merged.unexpected)?;
         }
     }
     Ok(())

@@ -1077,9 +1077,10 @@ fn snapshot(dir: &Path) -> std::collections::BTreeMap<String, Vec<u8>> {
     m
 }
 
-/// `studies merge` with a truncated case file in a shard stops before anything is written:
-/// exit 2 naming the file, no output folder, and the first shard (the default output) left
-/// as it was. It used to copy the other case files and the manifest first.
+/// `studies merge` with a truncated case file in a shard (and no other copy of it) stops
+/// before anything is written: exit 2 naming the file, no output folder, and the first shard
+/// (the default output) left as it was. It used to copy the other case files and the
+/// manifest first. A damaged file in the output with a good copy in a shard is replaced.
 #[test]
 fn merge_with_a_damaged_case_file_writes_nothing() {
     let d = TempDir::new("merge-damaged");
@@ -1156,6 +1157,23 @@ fn merge_with_a_damaged_case_file_writes_nothing() {
         &["s1/paper/manifest.json", "not a usable study manifest"],
         &[&out],
     );
+    // A damaged case file in the output with a good copy in a shard: the merge uses the
+    // copy (it replaces the damaged file), says so, and gives the output it gave before.
+    std::fs::write(&manifest, &m).unwrap();
+    let whole = d.path("whole");
+    let before = snapshot(&whole);
+    let damaged = whole.join("paper/cases").join(name);
+    std::fs::write(&damaged, &text[..text.len() / 3]).unwrap();
+    let r = pound(&merge(Some(&whole)));
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(0), "{err}");
+    assert!(
+        err.contains(&format!(
+            "whole/paper/cases/{name} is not a usable case file"
+        )) && err.contains(&format!("s2/paper/cases/{name} used instead")),
+        "{err}"
+    );
+    assert!(snapshot(&whole) == before, "the repaired output differs");
 }
 
 /// `--out` and `--history` naming one file (the JSON would replace the history) are refused

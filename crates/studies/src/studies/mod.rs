@@ -547,19 +547,31 @@ fn report(st: &dyn Study, ctx: &Ctx, specs: &[CaseSpec]) -> Result<Vec<String>> 
     Ok(unexpected)
 }
 
+/// What [`merge`] did.
+#[derive(Debug, Clone, Default)]
+pub struct Merged {
+    /// The studies merged.
+    pub studies: Vec<String>,
+    /// The cases with an unexpected outcome (`study: id: …`).
+    pub unexpected: Vec<String>,
+    /// Damaged case files (truncated, corrupt, another case's) passed over for a good copy
+    /// of the same case: (the damaged file, the copy used). A damaged file in the output is
+    /// replaced by the copy.
+    pub damaged: Vec<(PathBuf, PathBuf)>,
+}
+
 /// Merges shard outputs: `dirs` are output roots (each with `<study>/manifest.json` and
 /// `<study>/cases/`); coverage is checked (an error lists the missing ids) and every case
-/// file to be used is parsed (an error names a truncated or corrupt one) before anything is
-/// written; then the case files are gathered into `out` and the reports are written.
-/// Returns the studies merged and the cases with an unexpected outcome (`study: id: …`).
-pub fn merge(
-    dirs: &[PathBuf],
-    out: &Path,
-    studies_dir: &Path,
-) -> Result<(Vec<String>, Vec<String>)> {
+/// file to be used is parsed before anything is written: each case's file is the output's
+/// own, else the first shard's, and the first of these that parses is used (a damaged one
+/// in the output is replaced by a shard's good copy; an error names a damaged file when no
+/// copy of that case parses); then the case files are gathered into `out` and the reports
+/// are written.
+pub fn merge(dirs: &[PathBuf], out: &Path, studies_dir: &Path) -> Result<Merged> {
     // First every study's case list, its completeness and its case files parsed, so that a
     // missing or damaged case of any study stops the merge before anything is written.
     let mut plans = Vec::new();
+    let mut damaged_files = Vec::new();
     for &name in NAMES.iter().chain(&EXTRA) {
         let manifests: Vec<PathBuf> = dirs
             .iter()
@@ -595,22 +607,38 @@ pub fn merge(
             &m.options,
         )?;
         let specs = all_cases(st, &ctx)?;
-        // Every case's file: the output's own, else the first shard's that has it. A case
-        // with none is missing; every file found is read and parsed now, so a truncated or
-        // corrupt one stops the merge, naming it, before anything is copied or written.
+        // Every case's file: the output's own, else the first shard's that has it, the first
+        // of these that parses (read and parsed now, before anything is copied or written).
+        // A case with no file is missing; one whose every file is damaged stops the merge,
+        // naming the first damaged file.
         let dest = out.join(name);
         let mut missing = Vec::new();
         let mut copies = Vec::new();
         for s in &specs {
             let to = case_path(&dest, &s.id);
-            let from = std::iter::once(dest.clone())
+            let files = std::iter::once(dest.clone())
                 .chain(dirs.iter().map(|d| d.join(name)))
                 .map(|d| case_path(&d, &s.id))
-                .find(|p| p.is_file());
-            match from {
-                None => missing.push(s.id.clone()),
-                Some(from) => {
-                    read_case(&from, &s.id)?;
+                .filter(|p| p.is_file());
+            let (mut good, mut damaged) = (None, None);
+            for f in files {
+                match read_case(&f, &s.id) {
+                    Ok(_) => {
+                        good = Some(f);
+                        break;
+                    }
+                    Err(e) => {
+                        damaged.get_or_insert((f, e));
+                    }
+                }
+            }
+            match (good, damaged) {
+                (None, None) => missing.push(s.id.clone()),
+                (None, Some((_, e))) => return Err(e),
+                (Some(from), damaged) => {
+                    if let Some((bad, _)) = damaged {
+                        damaged_files.push((bad, from.clone()));
+                    }
                     if from != to {
                         copies.push((from, to));
                     }
@@ -663,7 +691,11 @@ pub fn merge(
         );
         merged.push(name.to_string());
     }
-    Ok((merged, unexpected))
+    Ok(Merged {
+        studies: merged,
+        unexpected,
+        damaged: damaged_files,
+    })
 }
 
 // ---------------------------------------------------------------------------------------
