@@ -18,6 +18,11 @@ fn soft_story_scene(k: f64) -> Scene {
 /// The pair of [`soft_story_scene`] with building `a`'s story 2 of `k` N/m, its damping ratio
 /// `zeta` and the roofs `gap` m apart.
 fn scene(k: f64, zeta: f64, gap: f64) -> Scene {
+    scene_with(k, zeta, gap, &[])
+}
+
+/// [`scene`] with `--set`-style overrides.
+fn scene_with(k: f64, zeta: f64, gap: f64, overrides: &[&str]) -> Scene {
     let text = format!(
         r#"
 name = "soft-story"
@@ -46,7 +51,8 @@ tolerance = 1e-11
 "#
     );
     let base = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../data/ground-motions");
-    Scene::from_str_with_overrides(&text, "soft-story", &base, &[]).expect("scene")
+    let o: Vec<String> = overrides.iter().map(|x| x.to_string()).collect();
+    Scene::from_str_with_overrides(&text, "soft-story", &base, &o).expect("scene")
 }
 
 fn peaks(out: &RunOutput) -> Vec<f64> {
@@ -60,7 +66,7 @@ fn peaks(out: &RunOutput) -> Vec<f64> {
 /// Stories of 1, 1e2, 1e4 and 1e6 N/m under stories of 1e9 N/m: the slow mode's ωh is
 /// 2.5e-6 … 2.5e-3. Against the impulse method (physical coordinates, rtol 1e-11) the peaks
 /// agree within 2.5e-11 and the input energy within 1e-12 (measured; asserted 1e-9), and the
-/// balance closes to 1e-14 of the input (asserted 1e-12). Before the series: balance errors of
+/// balance closes to 1e-14 of the input (asserted 1e-13). Before the series: balance errors of
 /// 25 times the input (1 N/m) and 1.5e-7 of it (1e4 N/m), peaks 1.4e-4 off (1 N/m).
 #[test]
 fn a_nearly_free_story_keeps_the_energy_balance_and_the_peaks() {
@@ -75,7 +81,7 @@ fn a_nearly_free_story_keeps_the_energy_balance_and_the_peaks() {
             e.input,
             (e.input - i.energy.input).abs() / e.input
         );
-        assert!(e.balance_error.abs() < 1e-12 * e.input, "k {k:e}: {e:?}");
+        assert!(e.balance_error.abs() < 1e-13 * e.input, "k {k:e}: {e:?}");
         assert!(
             (e.input - i.energy.input).abs() < 1e-9 * e.input,
             "k {k:e}: input {} vs impulse {}",
@@ -96,7 +102,7 @@ fn a_nearly_free_story_keeps_the_energy_balance_and_the_peaks() {
 /// Nearly critical damping (ζ = 0.9999 and 1 − 1e-8 in building `a`, 5 mm gap, 39 impacts):
 /// ω_d h is 1.4e-2 and 1.4e-4 of ωh and the closed form's damping integral cancels (balance
 /// errors of 8e-11 and 9e-7 of the input); with the series the balance closes to 1.2e-14 and
-/// 2.5e-15 of it (asserted 1e-12) and the peaks agree with the impulse method's within 1.3e-11
+/// 2.5e-15 of it (asserted 1e-13) and the peaks agree with the impulse method's within 1.3e-11
 /// (asserted 1e-9).
 #[test]
 fn nearly_critical_damping_keeps_the_energy_balance() {
@@ -116,8 +122,46 @@ fn nearly_critical_damping_keeps_the_energy_balance() {
             e.input,
             m.impacts.len()
         );
-        assert!(e.balance_error.abs() < 1e-12 * e.input, "ζ {zeta}: {e:?}");
+        assert!(e.balance_error.abs() < 1e-13 * e.input, "ζ {zeta}: {e:?}");
         assert_eq!(m.impacts.len(), i.impacts.len(), "ζ {zeta}");
         assert!(worst < 1e-9, "ζ {zeta}: peaks differ by {worst:.2e}");
+    }
+}
+
+/// The other paths a slow mode's arcs take, with a 1 N/m story: persistent contact (floors
+/// touching at a zero gap, c_r = 0: held trials and releases), a rigid wall (c_r = 0) and one
+/// kept mode per building (c_r = 0.65). With the series switched off their balance errors
+/// were 15, 6.4 and 67 times the input; with it they close to 1.2e-14 of it or better
+/// (measured; asserted 1e-13).
+#[test]
+fn persistent_contact_walls_and_truncated_modes_keep_the_balance() {
+    for (what, over) in [
+        (
+            "touching, c_r = 0",
+            vec!["contacts.0.gap=0", "contacts.0.restitution=0"],
+        ),
+        (
+            "wall, c_r = 0",
+            vec![
+                "contacts.0.right=wall",
+                "contacts.0.right_floor=",
+                "contacts.0.restitution=0",
+            ],
+        ),
+        (
+            "one mode, c_r = 0.65",
+            vec!["momentum.modes=1", "contacts.0.restitution=0.65"],
+        ),
+    ] {
+        let m = momentum::solve(&scene_with(1.0, 0.05, 0.02, &over), None).unwrap();
+        let e = &m.energy;
+        eprintln!(
+            "{what}: balance {:.2e} of input {:.3e}, {} impacts, {} persistent phases",
+            e.balance_error / e.input,
+            e.input,
+            m.impacts.len(),
+            m.persistent_contacts.len()
+        );
+        assert!(e.balance_error.abs() < 1e-13 * e.input, "{what}: {e:?}");
     }
 }

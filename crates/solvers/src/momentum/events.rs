@@ -1,7 +1,8 @@
 //! Event location on the closed form (Brent, `roots` crate).
 //!
 //! Within a segment [0, τ] the gap function δ(s) = g·q(s) − gap is known in closed form
-//! ([`super::modal::Arc`]). Sub-steps are short enough (≤ T_min/8) that δ has at most one
+//! ([`super::modal::Arc`]; a slow mode's arc by its Taylor series,
+//! [`super::modal::SERIES_BELOW`]). Sub-steps are short enough (≤ T_min/8) that δ has at most one
 //! extremum per segment, so with the end values (δ₀, δ̇₀, δ₁, δ̇₁):
 //! - δ₀ < 0 ≤ δ₁: one upward crossing, Brent on δ over [0, τ] (over [s_min, τ] when δ
 //!   falls first, δ̇₀ < 0 < δ̇₁: a rebound followed at once by a new approach);

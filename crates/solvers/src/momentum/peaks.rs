@@ -1,5 +1,6 @@
 //! Continuous peaks between samples (issue 10): the momentum method knows every mode in
-//! closed form between events, so a peak of a response quantity y(t) = Σ_n c_n q_n(t) (a
+//! closed form between events (a slow mode by its Taylor series,
+//! [`super::modal::SERIES_BELOW`]), so a peak of a response quantity y(t) = Σ_n c_n q_n(t) (a
 //! floor displacement, c_n = φ_n[i]; a story shear, c_n = k_j (φ_n[j] − φ_n[j−1])) that falls
 //! between two samples is found exactly rather than sampled.
 //!
@@ -296,7 +297,7 @@ pub fn hermite_error_bound(modal: &Modal, first: usize, c: &[f64], amp: &[f64], 
     len.powi(4) / 384.0 * d4
 }
 
-/// The exact extremum of y = Σ_m c[m] q_{first+m} on the closed-form `arcs`, by Newton on
+/// The exact extremum of y = Σ_m c[m] q_{first+m} on the `arcs` (closed form or series), by Newton on
 /// ẏ = 0 from `s0`, kept in [0, `len`]. Returns y at the extremum.
 pub fn refine(modal: &Modal, first: usize, c: &[f64], arcs: &[Arc], len: f64, s0: f64) -> f64 {
     refine_at(modal, first, c, arcs, len, s0).1

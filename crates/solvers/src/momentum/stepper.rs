@@ -4,8 +4,8 @@
 //! Between events every mode follows eq. 27 exactly: a full base step uses the constant
 //! Nigam–Jennings propagator of the step ([`super::modal::StepCoeffs`]),
 //! (q, q̇)ₖ₊₁ = A (q, q̇)ₖ + B (f(tₖ), f(tₖ₊₁)), f = −Γ a_g; a step that may hold a
-//! closure, or a partial step, uses the closed form [`Arc`] with event location
-//! ([`super::events`]). Every accepted segment is observed: floor displacements
+//! closure, or a partial step, uses the closed form [`Arc`] (the Taylor series for a slow
+//! mode, [`super::modal::SERIES_BELOW`]) with event location ([`super::events`]). Every accepted segment is observed: floor displacements
 //! u = Φq (eq. 26), story shears k_j (u_j − u_{j−1}) and their continuous peaks
 //! ([`super::peaks`]), the overlap audit, the history. Impacts are resolved in
 //! [`super::impact`], persistent-contact phases in [`super::persistent`].
