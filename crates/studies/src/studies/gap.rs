@@ -510,8 +510,25 @@ impl Study for Gap {
             }
         }
         if n > 0 {
+            // The grid's gaps strictly between 0 and 5 cm (the comparison above).
+            let between: Vec<String> = gs
+                .iter()
+                .filter(|g| **g > 0.0 && **g < 0.05)
+                .map(|g| format!("{}", g * 100.0))
+                .collect();
+            let smaller = match between.len() {
+                0 => "no gap of the grid lies strictly between 0 and 5 cm".to_string(),
+                1 => format!(
+                    "the {} cm gap (the grid's only one strictly between 0 and 5 cm) gives a smaller amplification than 5 cm for {small_lower} of {n}",
+                    between[0]
+                ),
+                _ => format!(
+                    "one of the grid's gaps strictly between 0 and 5 cm ({} cm) gives a smaller amplification than 5 cm for {small_lower} of {n}",
+                    between.join(", ")
+                ),
+            };
             reading.push(format!(
-                "Paper's statements (momentum method, building 2, contact story, the {n} records that pound at both 5 and 10 cm): a 5 cm gap gives a larger amplification than 10 cm for {worse5} of {n}; some gap of the grid below 5 cm gives a smaller amplification than 5 cm for {small_lower} of {n}."
+                "Paper's statements (momentum method, building 2, contact story, the {n} records that pound at both 5 and 10 cm): a 5 cm gap gives a larger amplification than 10 cm for {worse5} of {n}; {smaller}."
             ));
         }
         // The paper attributes the larger effect of a 5 cm gap to higher impact velocities:

@@ -953,7 +953,7 @@ impl Study for Yielding {
                 if let (Some(x), Quantity::Amplification | Quantity::Drift) = (x, q) {
                     p1.vlines.push(VLine {
                         x,
-                        label: format!("half at {x:.2} g"),
+                        label: format!("half at {} g", pga_text(x)),
                         color: color(*q),
                     });
                 }
@@ -1108,7 +1108,8 @@ impl Study for Yielding {
                     format!(
                         "{} against {}",
                         x.map_or(format!("at no level up to {pga_hi} g"), |x| format!(
-                            "from {x:.2} g (R = {:.2})",
+                            "from {} g (R = {:.2})",
+                            pga_text(x),
                             r_of(x)
                         )),
                         d.inelastic[*ri]
@@ -1156,8 +1157,9 @@ impl Study for Yielding {
                 .reduce(f64::min)
             {
                 Some(x) => format!(
-                    "So the linear modal method is within {:.0} % of the inelastic answer on most records only below {x:.2} g, i.e. R = {:.2} (median demand over strength); which records depart follows from their own elastic demand (next paragraph).",
+                    "So the linear modal method is within {:.0} % of the inelastic answer on most records only below {} g, i.e. R = {:.2} (median demand over strength); which records depart follows from their own elastic demand (next paragraph).",
                     100.0 * d.band,
+                    pga_text(x),
                     r_of(x)
                 ),
                 None => format!(
@@ -1196,7 +1198,8 @@ impl Study for Yielding {
                     " None of the pairs below the strength pounds: with this strength every elastic run that pounds has reached the strength somewhere (the median elastic roof closure without contact reaches the {} cm gap at {}), so here the modal method's domain of validity holds no pounding case; a stronger pair (a higher `reference_pga`) would pound before it yields.",
                     d.gap * 100.0,
                     onset.map_or(format!("no level up to {pga_hi} g"), |x| format!(
-                        "{x:.2} g (R = {:.2})",
+                        "{} g (R = {:.2})",
+                        pga_text(x),
                         r_of(x)
                     ))
                 )
@@ -1359,4 +1362,11 @@ impl Study for Yielding {
             )],
         )
     }
+}
+
+/// A PGA (g) found by interpolation, to three decimals without trailing zeros (0.175, 0.17):
+/// two decimals had printed 0.175 g and 0.17 g alike beside different R.
+fn pga_text(x: f64) -> String {
+    let s = format!("{x:.3}");
+    s.trim_end_matches('0').trim_end_matches('.').to_string()
 }
