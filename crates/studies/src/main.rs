@@ -84,7 +84,12 @@ enum Command {
         history: Option<PathBuf>,
         /// With --history: one row per this many seconds (the first sample at or after each
         /// multiple, and the last) instead of every sample.
-        #[arg(long, value_name = "SECONDS", requires = "history")]
+        #[arg(
+            long,
+            value_name = "SECONDS",
+            requires = "history",
+            allow_negative_numbers = true
+        )]
         history_dt: Option<f64>,
         /// Skip the run without contact that gives the amplification factors.
         #[arg(long)]
@@ -847,11 +852,17 @@ fn studies_command(command: StudiesCommand) -> Result<()> {
                 | studies::sweep::StudyError::NoManifests { .. } => input(e),
                 e => anyhow::Error::new(e),
             })?;
-            for (bad, good) in &merged.damaged {
+            for d in &merged.damaged {
+                let what = if d.replaced {
+                    "replaced by"
+                } else {
+                    "passed over for"
+                };
                 eprintln!(
-                    "note: {} is not a usable case file: {} used instead",
-                    bad.display(),
-                    good.display()
+                    "note: {} is not a usable case file ({}): {what} {}",
+                    d.file.display(),
+                    d.reason,
+                    d.used.display()
                 );
             }
             eprintln!(

@@ -44,7 +44,7 @@ pub enum StudyError {
     },
     /// A case file that `studies merge` would use cannot be read or parsed (truncated,
     /// corrupt) or holds another case.
-    #[error("{path}: not a usable case file ({message}); rerun the shard that wrote it (a rerun recomputes the case files it cannot read)")]
+    #[error("{path}: not a usable case file ({message}), and no other copy of the case parses; rerun the shard that wrote it (a rerun recomputes the case files it cannot read), or remove the file and rerun that shard")]
     CaseFile { path: String, message: String },
     /// A study manifest that `studies merge` reads does not parse (truncated, corrupt).
     #[error("{path}: not a usable study manifest ({message}); rerun the shard that wrote it")]

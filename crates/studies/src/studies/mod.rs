@@ -555,9 +555,22 @@ pub struct Merged {
     /// The cases with an unexpected outcome (`study: id: …`).
     pub unexpected: Vec<String>,
     /// Damaged case files (truncated, corrupt, another case's) passed over for a good copy
-    /// of the same case: (the damaged file, the copy used). A damaged file in the output is
-    /// replaced by the copy.
-    pub damaged: Vec<(PathBuf, PathBuf)>,
+    /// of the same case: for each such case the first damaged copy (the copies after the one
+    /// used are not read).
+    pub damaged: Vec<Damaged>,
+}
+
+/// A damaged case file that [`merge`] passed over.
+#[derive(Debug, Clone)]
+pub struct Damaged {
+    /// The damaged file.
+    pub file: PathBuf,
+    /// Why it cannot be used (the parse or read error).
+    pub reason: String,
+    /// The good copy used instead.
+    pub used: PathBuf,
+    /// The damaged file is the output's own, and the good copy replaces it.
+    pub replaced: bool,
 }
 
 /// Merges shard outputs: `dirs` are output roots (each with `<study>/manifest.json` and
@@ -636,8 +649,17 @@ pub fn merge(dirs: &[PathBuf], out: &Path, studies_dir: &Path) -> Result<Merged>
                 (None, None) => missing.push(s.id.clone()),
                 (None, Some((_, e))) => return Err(e),
                 (Some(from), damaged) => {
-                    if let Some((bad, _)) = damaged {
-                        damaged_files.push((bad, from.clone()));
+                    if let Some((bad, e)) = damaged {
+                        let reason = match e {
+                            StudyError::CaseFile { message, .. } => message,
+                            e => e.to_string(),
+                        };
+                        damaged_files.push(Damaged {
+                            replaced: bad == to,
+                            file: bad,
+                            reason,
+                            used: from.clone(),
+                        });
                     }
                     if from != to {
                         copies.push((from, to));
