@@ -114,21 +114,22 @@ impl Progress {
     /// Advance that counts as progress, s.
     pub const MIN_ADVANCE: f64 = 1e-9;
 
-    /// Checks the run at time `t` after `steps` steps; `Err(reason)` when it is stuck.
-    pub fn check(&mut self, t: f64, steps: u64) -> Result<(), String> {
+    /// Checks the run at time `t` after `steps` steps; `Stalled` at `t` when it is stuck.
+    pub fn check(&mut self, t: f64, steps: u64) -> Result<(), crate::SolverError> {
         if t > self.t + Self::MIN_ADVANCE || steps < self.steps {
             self.t = t;
             self.steps = steps;
             return Ok(());
         }
         if steps - self.steps > Self::WINDOW {
-            return Err(format!(
+            let reason = format!(
                 "time advanced less than {:e} s over {} steps (from t = {:.9} s): the contact or yield state cannot be resolved there; \
                  try another tolerance or time step, or check the scene for degenerate values (tiny masses or yield shears, extreme stiffness ratios)",
                 Self::MIN_ADVANCE,
                 steps - self.steps,
                 self.t
-            ));
+            );
+            return Err(crate::SolverError::Stalled { time: t, reason });
         }
         Ok(())
     }

@@ -144,34 +144,6 @@ pub fn history_rows(time: &[f64], every: Option<f64>) -> Vec<usize> {
     rows
 }
 
-#[cfg(test)]
-mod tests {
-    use super::history_rows;
-
-    #[test]
-    fn history_rows_keep_the_first_sample_after_each_multiple_and_the_last() {
-        // Record points of 0.1 s, an event at 0.25 s, the last sample off the grid.
-        let t = [0.0, 0.1, 0.2, 0.25, 0.30000000000000004, 0.4, 0.45];
-        assert_eq!(history_rows(&t, None), (0..7).collect::<Vec<_>>());
-        // Every 0.2 s: 0, 0.2, 0.4 (0.25 and 0.3 fall between multiples), and the last.
-        assert_eq!(history_rows(&t, Some(0.2)), vec![0, 2, 5, 6]);
-        // A sample within 1e-9·S below a multiple counts as on it: 0.3 − 1e-12.
-        let u = [0.0, 0.1, 0.3 - 1e-12, 0.35];
-        assert_eq!(history_rows(&u, Some(0.3)), vec![0, 2, 3]);
-        // An interval longer than the record: the first and the last sample.
-        assert_eq!(history_rows(&t, Some(100.0)), vec![0, 6]);
-        // One shorter than the sample spacing, down to one that overflows t/S: every sample.
-        for s in [1e-3, 1e-300, 1e-310, 5e-324] {
-            assert_eq!(
-                history_rows(&t, Some(s)),
-                (0..7).collect::<Vec<_>>(),
-                "S = {s}"
-            );
-        }
-        assert!(history_rows(&[], Some(0.1)).is_empty());
-    }
-}
-
 /// CSV text of a history, one row per sample (record points and event instants, so the
 /// grid is not uniform). Columns, every header quoted, buildings as named in the scene,
 /// floors and stories counted from 1, contacts from 0 as in the JSON:
@@ -359,4 +331,32 @@ pub fn history_csv(
         error: std::io::Error::other(e.to_string()),
     })?;
     Ok(String::from_utf8_lossy(&bytes).into_owned())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::history_rows;
+
+    #[test]
+    fn history_rows_keep_the_first_sample_after_each_multiple_and_the_last() {
+        // Record points of 0.1 s, an event at 0.25 s, the last sample off the grid.
+        let t = [0.0, 0.1, 0.2, 0.25, 0.30000000000000004, 0.4, 0.45];
+        assert_eq!(history_rows(&t, None), (0..7).collect::<Vec<_>>());
+        // Every 0.2 s: 0, 0.2, 0.4 (0.25 and 0.3 fall between multiples), and the last.
+        assert_eq!(history_rows(&t, Some(0.2)), vec![0, 2, 5, 6]);
+        // A sample within 1e-9·S below a multiple counts as on it: 0.3 − 1e-12.
+        let u = [0.0, 0.1, 0.3 - 1e-12, 0.35];
+        assert_eq!(history_rows(&u, Some(0.3)), vec![0, 2, 3]);
+        // An interval longer than the record: the first and the last sample.
+        assert_eq!(history_rows(&t, Some(100.0)), vec![0, 6]);
+        // One shorter than the sample spacing, down to one that overflows t/S: every sample.
+        for s in [1e-3, 1e-300, 1e-310, 5e-324] {
+            assert_eq!(
+                history_rows(&t, Some(s)),
+                (0..7).collect::<Vec<_>>(),
+                "S = {s}"
+            );
+        }
+        assert!(history_rows(&[], Some(0.1)).is_empty());
+    }
 }

@@ -92,6 +92,21 @@ pub fn f(v: Option<f64>, decimals: usize) -> String {
     }
 }
 
+/// At most `decimals` decimals, without trailing zeros (0.175, 0.17, 2.5; −0 as 0).
+pub fn trimmed(v: f64, decimals: usize) -> String {
+    let s = format!("{v:.decimals$}");
+    let s = if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    };
+    if s == "-0" {
+        "0".into()
+    } else {
+        s
+    }
+}
+
 /// Scientific notation with `digits` significant decimals.
 pub fn e(v: Option<f64>, digits: usize) -> String {
     match v {

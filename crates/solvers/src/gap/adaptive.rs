@@ -806,9 +806,7 @@ impl<'a> GapStepper<'a> {
                 limit: self.max_steps,
             });
         }
-        if let Err(reason) = self.progress.check(t, self.total_steps) {
-            return Err(SolverError::Stalled { time: t, reason });
-        }
+        self.progress.check(t, self.total_steps)?;
         let err = {
             let modes = ledger.modes();
             let stories: &Stories = stories;

@@ -333,9 +333,7 @@ impl<'a> ImpulseStepper<'a> {
                 limit: self.cfg.max_steps,
             });
         }
-        if let Err(reason) = self.progress.check(t, self.total_steps) {
-            return Err(SolverError::Stalled { time: t, reason });
-        }
+        self.progress.check(t, self.total_steps)?;
         let err = {
             let (stories, held, buf, seg) =
                 (&self.s.stories, &self.s.held, &mut self.buf, &self.seg);

@@ -431,7 +431,7 @@ impl StepCoeffs {
             };
             // The exponential integrals are the mode's, whatever the arc (a slow mode's
             // series arcs do not use them).
-            let series = modal.series.get(n).copied().unwrap_or(false);
+            let series = modal.series[n];
             let a0 = Arc::new(w, z, 0.0, 0.0, 0.0, 0.0, h);
             let kern = a0.damping_kernels(h, a0.trig(h));
             let unit_arc =
@@ -842,7 +842,7 @@ impl Arc {
     /// c₀ = q₀, c₁ = q̇₀, c_{k+2} = (f_k − 2ζω(k+1)c_{k+1} − ω²c_k)/((k+1)(k+2)) with f₀
     /// the load at 0, f₁ its slope g, f_k = 0 beyond. No term is a difference of the large
     /// particular and homogeneous parts (α ≈ f/ω², B ≈ g/(ω²ω_d)) whose cancellation
-    /// costs the closed form about (ωh)⁻² of its digits on a slow mode.
+    /// costs the closed form a factor of about (ωh)⁻² in accuracy on a slow mode.
     fn taylor(&self) -> [f64; SERIES_TERMS] {
         let (two_c, w2) = (2.0 * self.c, self.omega * self.omega);
         let mut c = [0.0; SERIES_TERMS];

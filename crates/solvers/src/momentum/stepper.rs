@@ -628,12 +628,7 @@ impl<'a> Stepper<'a> {
                 limit: self.p.limits.max_steps,
             });
         }
-        if let Err(reason) = self.progress.check(self.s.t, self.stats.steps) {
-            return Err(SolverError::Stalled {
-                time: self.s.t,
-                reason,
-            });
-        }
+        self.progress.check(self.s.t, self.stats.steps)?;
         if self.stats.steps.is_multiple_of(64) && !self.state_is_finite() {
             return Err(SolverError::NonFinite {
                 time: self.s.t,

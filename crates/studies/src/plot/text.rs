@@ -16,6 +16,7 @@
 
 use std::sync::OnceLock;
 
+use crate::table::trimmed as num;
 use ab_glyph::{Font, FontRef, GlyphId, OutlineCurve, Point};
 use ab_glyph_rasterizer::Rasterizer;
 use plotters_backend::text_anchor::{HPos, Pos, VPos};
@@ -372,20 +373,6 @@ impl<B: DrawingBackend> DrawingBackend for OutlineText<B> {
     ) -> Result<(u32, u32), DrawingErrorKind<B::ErrorType>> {
         let em = style.size();
         Ok((width(text, em).ceil() as u32, em.ceil() as u32))
-    }
-}
-
-fn num(v: f64, decimals: usize) -> String {
-    let s = format!("{v:.decimals$}");
-    let s = if s.contains('.') {
-        s.trim_end_matches('0').trim_end_matches('.').to_string()
-    } else {
-        s
-    };
-    if s == "-0" {
-        "0".into()
-    } else {
-        s
     }
 }
 

@@ -514,7 +514,7 @@ impl Study for Gap {
             let between: Vec<String> = gs
                 .iter()
                 .filter(|g| **g > 0.0 && **g < 0.05)
-                .map(|g| format!("{}", g * 100.0))
+                .map(|g| crate::table::trimmed(g * 100.0, 2))
                 .collect();
             let smaller = match between.len() {
                 0 => "no gap of the grid lies strictly between 0 and 5 cm".to_string(),

@@ -953,7 +953,7 @@ impl Study for Yielding {
                 if let (Some(x), Quantity::Amplification | Quantity::Drift) = (x, q) {
                     p1.vlines.push(VLine {
                         x,
-                        label: format!("half at {} g", pga_text(x)),
+                        label: format!("half at {} g", crate::table::trimmed(x, 3)),
                         color: color(*q),
                     });
                 }
@@ -1109,7 +1109,7 @@ impl Study for Yielding {
                         "{} against {}",
                         x.map_or(format!("at no level up to {pga_hi} g"), |x| format!(
                             "from {} g (R = {:.2})",
-                            pga_text(x),
+                            crate::table::trimmed(x, 3),
                             r_of(x)
                         )),
                         d.inelastic[*ri]
@@ -1159,7 +1159,7 @@ impl Study for Yielding {
                 Some(x) => format!(
                     "So the linear modal method is within {:.0} % of the inelastic answer on most records only below {} g, i.e. R = {:.2} (median demand over strength); which records depart follows from their own elastic demand (next paragraph).",
                     100.0 * d.band,
-                    pga_text(x),
+                    crate::table::trimmed(x, 3),
                     r_of(x)
                 ),
                 None => format!(
@@ -1199,7 +1199,7 @@ impl Study for Yielding {
                     d.gap * 100.0,
                     onset.map_or(format!("no level up to {pga_hi} g"), |x| format!(
                         "{} g (R = {:.2})",
-                        pga_text(x),
+                        crate::table::trimmed(x, 3),
                         r_of(x)
                     ))
                 )
@@ -1362,11 +1362,4 @@ impl Study for Yielding {
             )],
         )
     }
-}
-
-/// A PGA (g) found by interpolation, to three decimals without trailing zeros (0.175, 0.17):
-/// two decimals had printed 0.175 g and 0.17 g alike beside different R.
-fn pga_text(x: f64) -> String {
-    let s = format!("{x:.3}");
-    s.trim_end_matches('0').trim_end_matches('.').to_string()
 }
