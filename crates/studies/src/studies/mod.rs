@@ -1011,4 +1011,94 @@ mod tests {
             }
         }
     }
+
+    /// `check_every_case` (each override set once, each record once with the overrides its
+    /// checks read, [`reads_record`]) refuses a list of cases exactly when validating every
+    /// case in full refuses one, and then names a case that is refused in full: over records
+    /// of three steps (0.02, 0.01, 0.005 s) and two durations (40 s, 19.9 s), with and without
+    /// a PGA, and override sets whose refusal depends on the record (a Newmark step longer than
+    /// the record's step, a step longer than the record's duration) beside ones that do not.
+    /// The records are ordered so that the first case of every override set passes: a
+    /// refusal must come from the per-record probe. (Dropping `gap_element.time_step` or
+    /// `gap_element.integrator` from [`reads_record`] fails this test.)
+    #[test]
+    fn the_cheap_check_refuses_what_checking_every_case_refuses() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+        let gm = root.join("data/ground-motions");
+        let records: Vec<String> = [
+            "near-field/RSN1086_NORTHR-SYL_032.AT2", // dt 0.02 s, 40 s
+            "near-field/RSN1063_NORTHR-RRS_032.AT2", // dt 0.01 s, 19.9 s
+            "RSN767_LOMAP_G03090.AT2",               // dt 0.005 s, 39.9 s
+        ]
+        .iter()
+        .map(|r| gm.join(r).display().to_string())
+        .collect();
+        let ctx = Ctx {
+            name: "check".into(),
+            def: toml::Table::new(),
+            def_file: "check.toml".into(),
+            opts: StudyOptions::default(),
+            studies_dir: root.join("studies"),
+            dir: std::env::temp_dir().join("pound-cheap-check"),
+        };
+        let newmark = r#"gap_element.integrator="newmark""#;
+        let sets: [&[&str]; 8] = [
+            &[],
+            &[newmark, "gap_element.time_step=0.008"],
+            &[newmark, "gap_element.time_step=0.015"],
+            &[
+                newmark,
+                "gap_element.time_step=0.008",
+                "buildings.0.damping_ratio=0.03",
+            ],
+            &["gap_element.time_step=25"],
+            &["gap_element.time_step=25", "analysis.duration=30"],
+            &["buildings.1.damping_ratio=0.02", "contacts.0.gap=0.05"],
+            &["gap_element.time_step=0.015"],
+        ];
+        let (mut refused, mut passed) = (0, 0);
+        for set in sets {
+            for pga in [None, Some(0.3)] {
+                let specs: Vec<CaseSpec> = records
+                    .iter()
+                    .map(|r| {
+                        set.iter()
+                            .fold(
+                                CaseSpec::new("paper/scene.toml", Method::Momentum),
+                                |c, e| {
+                                    let (k, v) = e.split_once('=').unwrap();
+                                    c.with(k, v)
+                                },
+                            )
+                            .record(r, pga)
+                    })
+                    .collect();
+                let full: Vec<bool> = specs
+                    .iter()
+                    .map(|c| c.try_scene(&ctx.studies_dir).is_ok())
+                    .collect();
+                assert!(
+                    full[0],
+                    "{set:?}: the first case passes (so the probe decides)"
+                );
+                match check_every_case(&ctx, &specs) {
+                    Ok(()) => {
+                        assert!(full.iter().all(|&ok| ok), "{set:?} {pga:?}: {full:?}");
+                        passed += 1;
+                    }
+                    Err(e) => {
+                        let msg = e.to_string();
+                        let named = specs.iter().zip(&full).find(|(c, _)| msg.contains(&c.id));
+                        assert!(
+                            matches!(named, Some((_, false))),
+                            "{set:?} {pga:?}: names a case refused in full: {msg}"
+                        );
+                        refused += 1;
+                    }
+                }
+            }
+        }
+        // Not vacuous: both verdicts occur (sets 2–5 are refused on some record).
+        assert_eq!((refused, passed), (8, 8));
+    }
 }
