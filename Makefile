@@ -10,7 +10,7 @@
 CARGO ?= cargo
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 
-.PHONY: all build test studies robustness yielding-strong opensees bench fmt clippy clean
+.PHONY: all build test studies robustness yielding-strong opensees bench bench-table fmt clippy clean
 
 all: build
 
@@ -51,6 +51,18 @@ opensees: build
 
 bench:
 	$(CARGO) bench -p solvers
+
+# The README's speed table: the paper_scene group BENCH_RUNS times (machines are noisy: the
+# table gives fastest-of-N times and within-run ratios), then the table of the runs.
+BENCH_RUNS ?= 6
+bench-table:
+	rm -rf target/bench-runs
+	for i in $$(seq 1 $(BENCH_RUNS)); do \
+		$(CARGO) bench -p solvers --bench paper_scene && \
+		mkdir -p target/bench-runs && cp -r target/criterion/paper_scene target/bench-runs/$$i || exit 1; \
+	done
+	$(CARGO) run --release -q -p solvers --example bench_table -- $$(ls -d target/bench-runs/* | sort -t/ -k3 -n) \
+		| tee target/bench-table.md
 
 fmt:
 	$(CARGO) fmt --all

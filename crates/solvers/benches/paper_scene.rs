@@ -10,50 +10,19 @@
 //!
 //! Before timing, each case prints its deterministic work counts (mode-steps, right-hand-side
 //! evaluations, Newton iterations, steps) so that ratios of time can be read beside ratios of
-//! work. Scenes are loaded outside the timed loop.
+//! work. Scenes are loaded outside the timed loop. `make bench-table` runs the group several
+//! times and tabulates the runs (`examples/bench_table.rs`).
 
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use structure::testing::paper_scene as paper;
 
+#[path = "common/paper_scene.rs"]
+mod cases;
+
 fn bench(c: &mut Criterion) {
-    let cases: [(&str, solvers::Method, Vec<&str>); 5] = [
-        ("momentum", solvers::Method::Momentum, vec![]),
-        (
-            "gap/k=1e12/tol=1e-4",
-            solvers::Method::Gap,
-            vec![
-                "gap_element.law=linear",
-                "gap_element.stiffness=1e12",
-                "gap_element.tolerance=1e-4",
-            ],
-        ),
-        (
-            "gap/k=1e10/tol=1e-4",
-            solvers::Method::Gap,
-            vec![
-                "gap_element.law=kelvin-voigt",
-                "gap_element.stiffness=1e10",
-                "gap_element.tolerance=1e-4",
-            ],
-        ),
-        (
-            "newmark/k=1e10/dt=1e-3",
-            solvers::Method::Gap,
-            vec![
-                "gap_element.law=kelvin-voigt",
-                "gap_element.stiffness=1e10",
-                "gap_element.integrator=newmark",
-                "gap_element.time_step=1e-3",
-            ],
-        ),
-        (
-            "impulse/tol=1e-4",
-            solvers::Method::Impulse,
-            vec!["gap_element.tolerance=1e-4"],
-        ),
-    ];
+    let cases = cases::cases();
     let mut g = c.benchmark_group("paper_scene");
     g.sample_size(20);
     for (name, method, overrides) in cases {
