@@ -51,12 +51,10 @@ impl Stepper<'_> {
         self.amp_epoch += 1;
         let mut stored: Option<usize> = None;
         let nb = self.p.modal.buildings.len();
-        let skip_overlaps = self.envelope(simd, len);
-        let mut all = true;
+        let (skip_overlaps, skipping) = self.envelope(simd, len);
         for b in 0..nb {
-            if self.skip[b] {
+            if skipping && self.skip[b] {
                 self.prev_valid[b] = false;
-                all = false;
                 continue;
             }
             let bm = &self.p.modal.buildings[b];
@@ -73,6 +71,8 @@ impl Stepper<'_> {
                 let (up, udp) = (&mut self.u_prev[ur.clone()], &mut self.ud_prev[ur.clone()]);
                 bm.to_floors2(x0, v0, &mut up[1..], &mut udp[1..]);
             }
+            // (Read only above: this sample becomes the previous one.)
+            self.prev_valid[b] = true;
             let (u, ud) = (&mut self.u[ur.clone()], &mut self.ud[ur.clone()]);
             bm.to_floors2(&self.s.x, &self.s.v, &mut u[1..], &mut ud[1..]);
             let (raised, turns) = sample(
@@ -154,15 +154,6 @@ impl Stepper<'_> {
         // again, which rebuilds both from the modal state (`prev_valid` false).
         std::mem::swap(&mut self.u_prev, &mut self.u);
         std::mem::swap(&mut self.ud_prev, &mut self.ud);
-        if all {
-            self.prev_valid.fill(true);
-        } else {
-            for b in 0..nb {
-                if !self.skip[b] {
-                    self.prev_valid[b] = true;
-                }
-            }
-        }
         if self.history.is_some() {
             self.tracker.observe_contact_forces(&self.held_force);
             self.tracker.sample(self.s.t, self.history.as_deref_mut());
@@ -170,13 +161,13 @@ impl Stepper<'_> {
     }
 
     /// Sets `skip` per building from the energy envelope (see module docs) and returns
-    /// whether the overlap audit can be skipped too.
+    /// whether the overlap audit can be skipped too, and whether `skip` holds (else every
+    /// building is observed, whatever `skip` holds).
     #[inline(always)]
-    fn envelope<S: pulp::Simd>(&mut self, simd: S, len: f64) -> bool {
+    fn envelope<S: pulp::Simd>(&mut self, simd: S, len: f64) -> (bool, bool) {
         if !(len > 0.0) || self.history.is_some() || self.interval.fc.is_some() {
-            self.skip.fill(false);
             self.env_e2_fresh = false;
-            return false;
+            return (false, false);
         }
         let (p, iv) = (self.p, &self.interval);
         let amax = iv.a0.abs().max(iv.a1.abs());
@@ -203,7 +194,7 @@ impl Stepper<'_> {
             any |= skip[b];
         }
         if self.overlaps.is_empty() {
-            return true;
+            return (true, any);
         }
         if self.overlap_stale {
             // Per run, the smallest max(maximum, lower)/f_y of its pairs (0 if one is not
@@ -240,13 +231,10 @@ impl Stepper<'_> {
             // √(R_l² + R_r²) < best/f_y, squared (best > 0 needed, the bound is ≥ 0).
             if !(lim > 0.0 && (rl * rl + rr * rr) * (1.0 + 1e-9) < lim * lim) {
                 // A pair may reach its maximum: observe every building.
-                if any {
-                    self.skip.fill(false);
-                }
-                return false;
+                return (false, false);
             }
         }
-        true
+        (true, any)
     }
 
     /// Values and rates (y0, ẏ0, y1, ẏ1) of floor displacement `i` (or story shear `i` if
