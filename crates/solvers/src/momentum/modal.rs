@@ -651,6 +651,8 @@ impl ArcLanes {
         let n = arcs.len();
         let np = Self::padded(n);
         self.n = n;
+        // Each field's lanes: the arcs', then the padding's zeros (the buffers are kept from
+        // one call to the next, every lane written).
         for v in [
             &mut self.neg_c,
             &mut self.d,
@@ -661,23 +663,30 @@ impl ArcLanes {
             &mut self.vc,
             &mut self.vs,
         ] {
-            v.clear();
             v.resize(np, 0.0);
+            for z in &mut v[n..] {
+                *z = 0.0;
+            }
         }
         let (mut max_c, mut max_d) = (0.0f64, 0.0f64);
         self.series.clear();
+        // (Slices cut to the arcs: no bounds checks in the loop.)
+        let (neg_c, d) = (&mut self.neg_c[..n], &mut self.d[..n]);
+        let (alpha, beta) = (&mut self.alpha[..n], &mut self.beta[..n]);
+        let (fa, fb) = (&mut self.a[..n], &mut self.b[..n]);
+        let (vc, vs) = (&mut self.vc[..n], &mut self.vs[..n]);
         for (i, a) in arcs.iter().enumerate() {
             if a.series {
                 self.series.push((i, *a));
             }
-            self.neg_c[i] = -a.c;
-            self.d[i] = a.d;
-            self.alpha[i] = a.alpha;
-            self.beta[i] = a.beta;
-            self.a[i] = a.a;
-            self.b[i] = a.b;
-            self.vc[i] = a.b * a.d - a.c * a.a;
-            self.vs[i] = a.a * a.d + a.c * a.b;
+            neg_c[i] = -a.c;
+            d[i] = a.d;
+            alpha[i] = a.alpha;
+            beta[i] = a.beta;
+            fa[i] = a.a;
+            fb[i] = a.b;
+            vc[i] = a.b * a.d - a.c * a.a;
+            vs[i] = a.a * a.d + a.c * a.b;
             max_c = max_c.max(a.c);
             max_d = max_d.max(a.d);
         }

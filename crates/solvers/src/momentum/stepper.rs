@@ -941,12 +941,17 @@ impl<'a> Stepper<'a> {
         let m = &self.p.modal;
         self.arcs.clear();
         self.memo.iter_mut().for_each(TrigMemo::clear);
-        for n in 0..m.len() {
+        // `Modal::arc` of every mode, the modal vectors cut once (no bounds checks in the
+        // loop).
+        let nm = m.len();
+        let (gamma, omega, zeta) = (&m.gamma[..nm], &m.omega[..nm], &m.zeta[..nm]);
+        let (series, x, v) = (&m.series[..nm], &self.s.x[..nm], &self.s.v[..nm]);
+        let fc = fc.map(|f| &f[..nm]);
+        self.arcs.extend((0..nm).map(|n| {
             let extra = fc.map_or(0.0, |f| f[n]);
-            let (f0, f1) = (-m.gamma[n] * a0 + extra, -m.gamma[n] * a1 + extra);
-            self.arcs
-                .push(m.arc(n, self.s.x[n], self.s.v[n], f0, f1, tau));
-        }
+            let (f0, f1) = (-gamma[n] * a0 + extra, -gamma[n] * a1 + extra);
+            Arc::new(omega[n], zeta[n], x[n], v[n], f0, f1, tau).series_if(series[n])
+        }));
         self.lanes.set(&self.arcs);
     }
 
