@@ -372,7 +372,7 @@ mod tests {
             a0: k as f64,
             a1: 2.0 * k as f64,
             tau: 0.5,
-            fc: (k % 3 == 0).then(|| vec![k as f64 + 0.25; nm]),
+            fc: k.is_multiple_of(3).then(|| vec![k as f64 + 0.25; nm]),
             tau_done: 0.25,
         };
         let n = 2 * STATE_BLOCK + 7;
