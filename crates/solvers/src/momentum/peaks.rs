@@ -229,8 +229,41 @@ pub fn amplitude_constants(modal: &Modal) -> Vec<[f64; 3]> {
 /// `out[range]` ([`Arc::amplitude`] without the arcs; `k` from [`amplitude_constants`]):
 /// A = q₀ − α, B = (q̇₀ − β + ζωA)/ω_d with β = (f₁ − f₀)/(τω²), α = (f₀ − 2ζωβ)/ω². The
 /// products by reciprocals round differently from the arcs' divisions: these amplitudes
-/// feed error bounds only.
+/// feed error bounds only. In the widest instruction set ([`pulp::Arch`]; exact operations
+/// only, the same bits on every machine).
 pub fn amplitudes(
+    modal: &Modal,
+    k: &[[f64; 3]],
+    range: std::ops::Range<usize>,
+    iv: &Interval,
+    out: &mut [f64],
+) {
+    struct Op<'x> {
+        modal: &'x Modal,
+        k: &'x [[f64; 3]],
+        range: std::ops::Range<usize>,
+        iv: &'x Interval,
+        out: &'x mut [f64],
+    }
+    impl pulp::WithSimd for Op<'_> {
+        type Output = ();
+        #[inline(always)]
+        fn with_simd<S: pulp::Simd>(self, _: S) {
+            amplitudes_in(self.modal, self.k, self.range, self.iv, self.out)
+        }
+    }
+    pulp::Arch::new().dispatch(Op {
+        modal,
+        k,
+        range,
+        iv,
+        out,
+    })
+}
+
+/// [`amplitudes`], inlined into the instruction set of its caller.
+#[inline(always)]
+fn amplitudes_in(
     modal: &Modal,
     k: &[[f64; 3]],
     range: std::ops::Range<usize>,
