@@ -265,33 +265,31 @@ impl Stepper<'_> {
     fn cubic_filter(&self, b: usize, n: usize, g: usize, len: f64) -> u64 {
         let mut w = self.flags[g].to_bits();
         let mut keep = w;
-        // (Slices cut once: their bounds in registers.)
+        // (Indexed in the flat buffers: only the set bits' quantities are read.)
         let (o, f) = (b * (self.fs + 1), b * self.fs);
-        let (u, ud) = (&self.u[o..][..=n], &self.ud[o..][..=n]);
-        let (up, udp) = (&self.u_prev[o..][..=n], &self.ud_prev[o..][..=n]);
-        let (dm, dl) = (&self.disp_max[f..][..n], &self.disp_lower[f..][..n]);
-        let (sm, sl) = (&self.shear_max[f..][..n], &self.shear_lower[f..][..n]);
-        let k = &self.stiffness[f..][..n];
+        let (u, ud, up, udp) = (&self.u, &self.ud, &self.u_prev, &self.ud_prev);
         let c = 4.0 / 27.0 * len;
         while w != 0 {
             let t = w.trailing_zeros() as usize;
             w &= w - 1;
             let i = g * TURN_GROUP + t / 2;
+            debug_assert!(i < n);
+            let (j, fi) = (o + i, f + i);
             let ((y0, yd0, y1, yd1), peak) = if t & 1 == 1 {
-                let k = k[i];
+                let k = self.stiffness[fi];
                 (
                     (
-                        k * (up[i + 1] - up[i]),
-                        k * (udp[i + 1] - udp[i]),
-                        k * (u[i + 1] - u[i]),
-                        k * (ud[i + 1] - ud[i]),
+                        k * (up[j + 1] - up[j]),
+                        k * (udp[j + 1] - udp[j]),
+                        k * (u[j + 1] - u[j]),
+                        k * (ud[j + 1] - ud[j]),
                     ),
-                    sm[i].max(sl[i]),
+                    self.shear_max[fi].max(self.shear_lower[fi]),
                 )
             } else {
                 (
-                    (up[i + 1], udp[i + 1], u[i + 1], ud[i + 1]),
-                    dm[i].max(dl[i]),
+                    (up[j + 1], udp[j + 1], u[j + 1], ud[j + 1]),
+                    self.disp_max[fi].max(self.disp_lower[fi]),
                 )
             };
             if cubic_bound(y0, yd0, y1, yd1, c) * (1.0 + 1e-9) < 0.9 * peak {
