@@ -45,7 +45,7 @@ impl Stepper<'_> {
     }
 
     #[inline(always)]
-    fn observe_with<S: pulp::Simd>(&mut self, simd: S) {
+    pub(super) fn observe_with<S: pulp::Simd>(&mut self, simd: S) {
         let len = self.interval.tau_done;
         // A new sample: every building's amplitudes are stale.
         self.amp_epoch += 1;

@@ -710,7 +710,7 @@ impl<'a> Stepper<'a> {
         impl pulp::WithSimd for Op<'_, '_> {
             type Output = Result<Option<Step>, SolverError>;
             #[inline(always)]
-            fn with_simd<S: pulp::Simd>(self, _: S) -> Self::Output {
+            fn with_simd<S: pulp::Simd>(self, simd: S) -> Self::Output {
                 // Consecutive fast steps in one dispatch: after an accepted step, the next
                 // one too if `advance` would take it on the fast path (the caller does
                 // nothing between `Reached` steps). A step found to need the closed form
@@ -719,7 +719,7 @@ impl<'a> Stepper<'a> {
                 let (mut j, mut t_end) = (self.j, self.t_end);
                 let mut accepted = false;
                 loop {
-                    match self.st.fast_step_body(j, t_end)? {
+                    match self.st.fast_step_body(simd, j, t_end)? {
                         None if accepted => {
                             self.st.fast_rejected = Some(j);
                             return Ok(Some(Step::Reached));
@@ -741,7 +741,12 @@ impl<'a> Stepper<'a> {
     }
 
     #[inline(always)]
-    fn fast_step_body(&mut self, j: usize, t_end: f64) -> Result<Option<Step>, SolverError> {
+    fn fast_step_body<S: pulp::Simd>(
+        &mut self,
+        simd: S,
+        j: usize,
+        t_end: f64,
+    ) -> Result<Option<Step>, SolverError> {
         let p = self.p;
         let (a0, a1) = (p.ag_start[j], p.ag_end[j]);
         let h = p.full.h;
@@ -931,7 +936,8 @@ impl<'a> Stepper<'a> {
         self.finish_grid(j, t_end);
         self.count_step(h)?;
         self.interval.tau_done = h;
-        self.observe();
+        // (In this instruction set already: no second dispatch.)
+        self.observe_with(simd);
         Ok(Some(Step::Reached))
     }
 
