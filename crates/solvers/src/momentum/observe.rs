@@ -45,44 +45,46 @@ impl Stepper<'_> {
     }
 
     #[inline(always)]
-    fn observe_with<S: pulp::Simd>(&mut self, simd: S) {
+    pub(super) fn observe_with<S: pulp::Simd>(&mut self, simd: S) {
         let len = self.interval.tau_done;
         // A new sample: every building's amplitudes are stale.
         self.amp_epoch += 1;
         let mut stored: Option<usize> = None;
         let nb = self.p.modal.buildings.len();
-        let skip_overlaps = self.envelope(simd, len);
-        let mut all = true;
+        let (skip_overlaps, skipping) = self.envelope(simd, len);
         for b in 0..nb {
-            if self.skip[b] {
+            if skipping && self.skip[b] {
                 self.prev_valid[b] = false;
-                all = false;
                 continue;
             }
             let bm = &self.p.modal.buildings[b];
-            let nf = bm.n_floors;
+            let (nf, pf) = (bm.n_floors, bm.padded_floors());
+            // The building's parts of the flat buffers (see `Stepper::u`, `Stepper::disp_max`).
+            let (ur, fr) = (
+                b * (self.fs + 1)..b * (self.fs + 1) + pf + 1,
+                b * self.fs..b * self.fs + pf,
+            );
             if len > 0.0 && !self.prev_valid[b] {
                 // The previous sample was skipped: the rates and values at the interval
                 // start, from its modal state.
                 let (x0, v0) = (&self.interval.x0, &self.interval.v0);
-                bm.to_floors2(x0, v0, &mut self.u_prev[b][1..], &mut self.ud_prev[b][1..]);
+                let (up, udp) = (&mut self.u_prev[ur.clone()], &mut self.ud_prev[ur.clone()]);
+                bm.to_floors2(x0, v0, &mut up[1..], &mut udp[1..]);
             }
-            bm.to_floors2(
-                &self.s.x,
-                &self.s.v,
-                &mut self.u[b][1..],
-                &mut self.ud[b][1..],
-            );
+            // (Read only above: this sample becomes the previous one.)
+            self.prev_valid[b] = true;
+            let (u, ud) = (&mut self.u[ur.clone()], &mut self.ud[ur.clone()]);
+            bm.to_floors2(&self.s.x, &self.s.v, &mut u[1..], &mut ud[1..]);
             let (raised, turns) = sample(
                 simd,
                 Sample {
-                    u: &self.u[b],
-                    ud: &self.ud[b],
-                    udp: &self.ud_prev[b],
-                    k: &self.stiffness[b],
+                    u,
+                    ud,
+                    udp: &self.ud_prev[ur.clone()],
+                    k: &self.stiffness[fr.clone()],
                 },
-                &mut self.disp_max[b],
-                &mut self.shear_max[b],
+                &mut self.disp_max[fr.clone()],
+                &mut self.shear_max[fr.clone()],
                 &mut self.flags,
             );
             self.env_stale[b] |= raised;
@@ -92,9 +94,9 @@ impl Stepper<'_> {
                 // words of `sample`, lowest first) and that passes the first filter of
                 // `interior_extremum` (decided here for all of them at once: the slow path
                 // of one quantity changes nothing that filter reads for another).
-                let groups = self.disp_max[b].len().div_ceil(TURN_GROUP);
+                let groups = pf.div_ceil(TURN_GROUP);
                 for g in 0..groups {
-                    let mut w = self.cubic_filter(b, g, len);
+                    let mut w = self.cubic_filter(b, pf, g, len);
                     while w != 0 {
                         let t = w.trailing_zeros() as usize;
                         w &= w - 1;
@@ -104,8 +106,8 @@ impl Stepper<'_> {
                 }
             }
             if self.history.is_some() {
-                self.tracker.observe(b, &self.u[b][1..=nf]);
-                self.tracker.observe_velocity(b, &self.ud[b][1..=nf]);
+                self.tracker.observe(b, &self.u[ur.clone()][1..=nf]);
+                self.tracker.observe_velocity(b, &self.ud[ur][1..=nf]);
             }
             // The envelope threshold min_y peak_y/f_y, recomputed when a peak (or a lower
             // bound) has grown: peaks only grow, so an older threshold is a safe one.
@@ -115,10 +117,9 @@ impl Stepper<'_> {
             self.env_stale[b] = false;
             // Running minima in vectors over the padded floors (a padding floor's 0 · ∞ = NaN
             // is never below one), then the least of them: the minimum of the same values.
-            let pf = self.disp_max[b].len();
-            let (inv_d, inv_s) = self.env_inv[b][..2 * pf].split_at(pf);
-            let (dm, dl) = (&self.disp_max[b][..pf], &self.disp_lower[b][..pf]);
-            let (sm, sl) = (&self.shear_max[b][..pf], &self.shear_lower[b][..pf]);
+            let (inv_d, inv_s) = self.env_inv[2 * fr.start..][..2 * pf].split_at(pf);
+            let (dm, dl) = (&self.disp_max[fr.clone()], &self.disp_lower[fr.clone()]);
+            let (sm, sl) = (&self.shear_max[fr.clone()], &self.shear_lower[fr]);
             let (dm, dmt) = S::as_simd_f64s(dm);
             let (dl, dlt) = S::as_simd_f64s(dl);
             let (sm, smt) = S::as_simd_f64s(sm);
@@ -148,21 +149,11 @@ impl Stepper<'_> {
         if !self.overlaps.is_empty() && !skip_overlaps {
             self.observe_overlaps(simd, len, &mut stored);
         }
-        // The current sample becomes the previous one (buffers exchanged; all at once when
-        // every building was observed).
-        if all {
-            std::mem::swap(&mut self.u_prev, &mut self.u);
-            std::mem::swap(&mut self.ud_prev, &mut self.ud);
-            self.prev_valid.fill(true);
-        } else {
-            for b in 0..nb {
-                if !self.skip[b] {
-                    std::mem::swap(&mut self.u_prev[b], &mut self.u[b]);
-                    std::mem::swap(&mut self.ud_prev[b], &mut self.ud[b]);
-                    self.prev_valid[b] = true;
-                }
-            }
-        }
+        // The current sample becomes the previous one (buffers exchanged). A skipped
+        // building's parts are exchanged too: they are not read before it is observed
+        // again, which rebuilds both from the modal state (`prev_valid` false).
+        std::mem::swap(&mut self.u_prev, &mut self.u);
+        std::mem::swap(&mut self.ud_prev, &mut self.ud);
         if self.history.is_some() {
             self.tracker.observe_contact_forces(&self.held_force);
             self.tracker.sample(self.s.t, self.history.as_deref_mut());
@@ -170,13 +161,13 @@ impl Stepper<'_> {
     }
 
     /// Sets `skip` per building from the energy envelope (see module docs) and returns
-    /// whether the overlap audit can be skipped too.
+    /// whether the overlap audit can be skipped too, and whether `skip` holds (else every
+    /// building is observed, whatever `skip` holds).
     #[inline(always)]
-    fn envelope<S: pulp::Simd>(&mut self, simd: S, len: f64) -> bool {
+    fn envelope<S: pulp::Simd>(&mut self, simd: S, len: f64) -> (bool, bool) {
         if !(len > 0.0) || self.history.is_some() || self.interval.fc.is_some() {
-            self.skip.fill(false);
             self.env_e2_fresh = false;
-            return false;
+            return (false, false);
         }
         let (p, iv) = (self.p, &self.interval);
         let amax = iv.a0.abs().max(iv.a1.abs());
@@ -203,7 +194,7 @@ impl Stepper<'_> {
             any |= skip[b];
         }
         if self.overlaps.is_empty() {
-            return true;
+            return (true, any);
         }
         if self.overlap_stale {
             // Per run, the smallest max(maximum, lower)/f_y of its pairs (0 if one is not
@@ -240,13 +231,10 @@ impl Stepper<'_> {
             // √(R_l² + R_r²) < best/f_y, squared (best > 0 needed, the bound is ≥ 0).
             if !(lim > 0.0 && (rl * rl + rr * rr) * (1.0 + 1e-9) < lim * lim) {
                 // A pair may reach its maximum: observe every building.
-                if any {
-                    self.skip.fill(false);
-                }
-                return false;
+                return (false, false);
             }
         }
-        true
+        (true, any)
     }
 
     /// Values and rates (y0, ẏ0, y1, ẏ1) of floor displacement `i` (or story shear `i` if
@@ -254,9 +242,11 @@ impl Stepper<'_> {
     /// as [`sample`].
     #[inline]
     fn ends(&self, b: usize, i: usize, story: bool) -> (f64, f64, f64, f64) {
-        let (u, ud, up, udp) = (&self.u[b], &self.ud[b], &self.u_prev[b], &self.ud_prev[b]);
+        let o = b * (self.fs + 1);
+        let (u, ud) = (&self.u[o..], &self.ud[o..]);
+        let (up, udp) = (&self.u_prev[o..], &self.ud_prev[o..]);
         if story {
-            let k = self.stiffness[b][i];
+            let k = self.stiffness[b * self.fs + i];
             (
                 k * (up[i + 1] - up[i]),
                 k * (udp[i + 1] - udp[i]),
@@ -268,39 +258,38 @@ impl Stepper<'_> {
         }
     }
 
-    /// The set bits of turn word `g` of building `b` (see [`sample`]) whose quantity passes
-    /// the first filter of [`Stepper::interior_extremum`] (the same values, the same test).
+    /// The set bits of turn word `g` of building `b` (`n` padded floors; see [`sample`]) whose
+    /// quantity passes the first filter of [`Stepper::interior_extremum`] (the same values,
+    /// the same test).
     #[inline(never)]
-    fn cubic_filter(&self, b: usize, g: usize, len: f64) -> u64 {
+    fn cubic_filter(&self, b: usize, n: usize, g: usize, len: f64) -> u64 {
         let mut w = self.flags[g].to_bits();
         let mut keep = w;
-        // (Slices cut once: their bounds in registers.)
-        let n = self.disp_max[b].len();
-        let (u, ud) = (&self.u[b][..=n], &self.ud[b][..=n]);
-        let (up, udp) = (&self.u_prev[b][..=n], &self.ud_prev[b][..=n]);
-        let (dm, dl) = (&self.disp_max[b][..n], &self.disp_lower[b][..n]);
-        let (sm, sl) = (&self.shear_max[b][..n], &self.shear_lower[b][..n]);
-        let k = &self.stiffness[b][..n];
+        // (Indexed in the flat buffers: only the set bits' quantities are read.)
+        let (o, f) = (b * (self.fs + 1), b * self.fs);
+        let (u, ud, up, udp) = (&self.u, &self.ud, &self.u_prev, &self.ud_prev);
         let c = 4.0 / 27.0 * len;
         while w != 0 {
             let t = w.trailing_zeros() as usize;
             w &= w - 1;
             let i = g * TURN_GROUP + t / 2;
+            debug_assert!(i < n);
+            let (j, fi) = (o + i, f + i);
             let ((y0, yd0, y1, yd1), peak) = if t & 1 == 1 {
-                let k = k[i];
+                let k = self.stiffness[fi];
                 (
                     (
-                        k * (up[i + 1] - up[i]),
-                        k * (udp[i + 1] - udp[i]),
-                        k * (u[i + 1] - u[i]),
-                        k * (ud[i + 1] - ud[i]),
+                        k * (up[j + 1] - up[j]),
+                        k * (udp[j + 1] - udp[j]),
+                        k * (u[j + 1] - u[j]),
+                        k * (ud[j + 1] - ud[j]),
                     ),
-                    sm[i].max(sl[i]),
+                    self.shear_max[fi].max(self.shear_lower[fi]),
                 )
             } else {
                 (
-                    (up[i + 1], udp[i + 1], u[i + 1], ud[i + 1]),
-                    dm[i].max(dl[i]),
+                    (up[j + 1], udp[j + 1], u[j + 1], ud[j + 1]),
+                    self.disp_max[fi].max(self.disp_lower[fi]),
                 )
             };
             if cubic_bound(y0, yd0, y1, yd1, c) * (1.0 + 1e-9) < 0.9 * peak {
@@ -326,10 +315,11 @@ impl Stepper<'_> {
         stored: &mut Option<usize>,
     ) {
         let (y0, yd0, y1, yd1) = self.ends(b, i, story);
+        let f = b * self.fs + i;
         let (exact, lower) = if story {
-            (self.shear_max[b][i], self.shear_lower[b][i])
+            (self.shear_max[f], self.shear_lower[f])
         } else {
-            (self.disp_max[b][i], self.disp_lower[b][i])
+            (self.disp_max[f], self.disp_lower[f])
         };
         let peak = exact.max(lower);
         // |H| ≤ max(|y0|, |y1|) + 4/27 len (|ẏ0| + |ẏ1|) (the Hermite basis functions of
@@ -366,9 +356,9 @@ impl Stepper<'_> {
         }
         let lb = h.abs() - bound;
         if story {
-            self.shear_lower[b][i] = lower.max(lb);
+            self.shear_lower[f] = lower.max(lb);
         } else {
-            self.disp_lower[b][i] = lower.max(lb);
+            self.disp_lower[f] = lower.max(lb);
         }
         self.env_stale[b] = true;
         let interval = *stored.get_or_insert_with(|| self.deferred.store(&self.interval, self.s.t));
@@ -419,13 +409,10 @@ impl Stepper<'_> {
         let (u, ud, up, udp) = (&self.u, &self.ud, &self.u_prev, &self.ud_prev);
         let op = &self.overlaps.pairs[k];
         let (l, i, r, j) = (op.left, op.left_dof, op.right, op.right_dof);
-        let (i, j) = (i + 1, j + 1); // the leading zero of the buffers
-        let y1 = u[l][i] - u[r][j];
-        let (y0, yd0, yd1) = (
-            up[l][i] - up[r][j],
-            udp[l][i] - udp[r][j],
-            ud[l][i] - ud[r][j],
-        );
+        // The flat buffers' indices (past the leading zero of each building's part).
+        let (i, j) = (l * (self.fs + 1) + i + 1, r * (self.fs + 1) + j + 1);
+        let y1 = u[i] - u[j];
+        let (y0, yd0, yd1) = (up[i] - up[j], udp[i] - udp[j], ud[i] - ud[j]);
         let best = self.overlaps.max[k].max(self.overlap_lower[k]);
         // H ≤ max(y0, y1) + 4/27 len (|ẏ0| + |ẏ1|) (see `interior_extremum`), and the
         // filter below drops h < best/1.1 (best > 0) or h < best/0.9 (best ≤ 0).
@@ -472,8 +459,8 @@ impl Stepper<'_> {
         let p = self.p;
         let modal = &p.modal;
         let best = |st: &Self, c: &Candidate| match c.target {
-            Target::Displacement { building, floor } => st.disp_max[building][floor],
-            Target::Shear { building, story } => st.shear_max[building][story],
+            Target::Displacement { building, floor } => st.disp_max[building * st.fs + floor],
+            Target::Shear { building, story } => st.shear_max[building * st.fs + story],
             Target::Overlap { pair } => st.overlaps.max[pair],
         };
         // Only candidates that can beat their peak now are ordered (peaks only grow, so the
@@ -532,9 +519,9 @@ impl Stepper<'_> {
                     );
                     let y = peaks::refine(modal, first, coef, &a, iv.len, c.s0).abs();
                     let m = if story {
-                        &mut self.shear_max[b][i]
+                        &mut self.shear_max[b * self.fs + i]
                     } else {
-                        &mut self.disp_max[b][i]
+                        &mut self.disp_max[b * self.fs + i]
                     };
                     *m = m.max(y);
                 }
@@ -559,6 +546,7 @@ impl pulp::WithSimd for OverlapPass<'_, '_> {
     fn with_simd<S: pulp::Simd>(self, simd: S) -> (bool, bool) {
         let st = self.st;
         let (u, ud, udp) = (&st.u, &st.ud, &st.ud_prev);
+        let stride = st.fs + 1;
         let now = st.s.t;
         let ov = &mut st.overlaps;
         let (zero, one, nowv) = (
@@ -592,10 +580,14 @@ impl pulp::WithSimd for OverlapPass<'_, '_> {
         let lanes = std::mem::size_of::<S::f64s>() / std::mem::size_of::<f64>();
         for run in &st.overlap_runs {
             let (n, k0) = (run.n, run.k0);
-            let (i0, j0) = (run.i0 + 1, run.j0 + 1); // the leading zero of the buffers
-            let (ul, ur) = (&u[run.left][i0..i0 + n], &u[run.right][j0..j0 + n]);
-            let (vl, vr) = (&ud[run.left][i0..i0 + n], &ud[run.right][j0..j0 + n]);
-            let (pl, pr) = (&udp[run.left][i0..i0 + n], &udp[run.right][j0..j0 + n]);
+            // The flat buffers' indices (past the leading zero of each building's part).
+            let (i0, j0) = (
+                run.left * stride + run.i0 + 1,
+                run.right * stride + run.j0 + 1,
+            );
+            let (ul, ur) = (&u[i0..i0 + n], &u[j0..j0 + n]);
+            let (vl, vr) = (&ud[i0..i0 + n], &ud[j0..j0 + n]);
+            let (pl, pr) = (&udp[i0..i0 + n], &udp[j0..j0 + n]);
             let (max, mt) = S::as_mut_simd_f64s(&mut ov.max[k0..k0 + n]);
             let (time, tt) = S::as_mut_simd_f64s(&mut ov.time[k0..k0 + n]);
             let (flag, ft) = S::as_mut_simd_f64s(&mut st.overlap_turn[k0..k0 + n]);

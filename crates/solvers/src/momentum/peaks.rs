@@ -116,8 +116,9 @@ pub struct Candidate {
 #[derive(Debug, Clone, Default)]
 pub struct Deferred {
     nm: usize,
-    /// Per stored interval: x0 then v0, `nm` each.
-    state: Vec<f64>,
+    /// Per stored interval: x0 then v0, `nm` each, in blocks of [`STATE_BLOCK`] intervals
+    /// (a full block is kept as it is and a new one begun: no reallocation copies them).
+    state: Vec<Vec<f64>>,
     /// Held-contact loads of the stored intervals that have some, `nm` each.
     fc: Vec<f64>,
     /// Per stored interval: (a0, a1, tau, integrated length, sample time at its end, offset
@@ -139,12 +140,14 @@ pub struct StoredInterval<'a> {
     pub t_end: f64,
 }
 
+/// Stored intervals per block of [`Deferred`]'s states (the paper scene stores about 650).
+const STATE_BLOCK: usize = 256;
+
 impl Deferred {
     pub fn new(nm: usize) -> Self {
         Deferred {
             nm,
-            // Room for 256 intervals (the paper scene stores about 570): few reallocations.
-            state: Vec::with_capacity(512 * nm),
+            state: vec![Vec::with_capacity(2 * STATE_BLOCK * nm)],
             ..Default::default()
         }
     }
@@ -152,8 +155,13 @@ impl Deferred {
     /// Stores the interval `iv` (integrated up to the sample at `t_end`); returns its index.
     pub fn store(&mut self, iv: &Interval, t_end: f64) -> usize {
         let nm = self.nm;
-        self.state.extend_from_slice(&iv.x0[..nm]);
-        self.state.extend_from_slice(&iv.v0[..nm]);
+        if self.meta.len() == self.state.len() * STATE_BLOCK {
+            // Every block is full.
+            self.state.push(Vec::with_capacity(2 * STATE_BLOCK * nm));
+        }
+        let block = self.state.last_mut().expect("a block");
+        block.extend_from_slice(&iv.x0[..nm]);
+        block.extend_from_slice(&iv.v0[..nm]);
         let held = iv.fc.as_ref().map(|f| {
             self.fc.extend_from_slice(&f[..nm]);
             self.fc.len() - nm
@@ -167,7 +175,8 @@ impl Deferred {
     pub fn interval(&self, k: usize) -> StoredInterval<'_> {
         let nm = self.nm;
         let (a0, a1, tau, len, t_end, held) = self.meta[k];
-        let (x0, v0) = self.state[2 * k * nm..2 * (k + 1) * nm].split_at(nm);
+        let j = k % STATE_BLOCK;
+        let (x0, v0) = self.state[k / STATE_BLOCK][2 * j * nm..2 * (j + 1) * nm].split_at(nm);
         StoredInterval {
             x0,
             v0,
@@ -220,8 +229,41 @@ pub fn amplitude_constants(modal: &Modal) -> Vec<[f64; 3]> {
 /// `out[range]` ([`Arc::amplitude`] without the arcs; `k` from [`amplitude_constants`]):
 /// A = q₀ − α, B = (q̇₀ − β + ζωA)/ω_d with β = (f₁ − f₀)/(τω²), α = (f₀ − 2ζωβ)/ω². The
 /// products by reciprocals round differently from the arcs' divisions: these amplitudes
-/// feed error bounds only.
+/// feed error bounds only. In the widest instruction set ([`pulp::Arch`]; exact operations
+/// only, the same bits on every machine).
 pub fn amplitudes(
+    modal: &Modal,
+    k: &[[f64; 3]],
+    range: std::ops::Range<usize>,
+    iv: &Interval,
+    out: &mut [f64],
+) {
+    struct Op<'x> {
+        modal: &'x Modal,
+        k: &'x [[f64; 3]],
+        range: std::ops::Range<usize>,
+        iv: &'x Interval,
+        out: &'x mut [f64],
+    }
+    impl pulp::WithSimd for Op<'_> {
+        type Output = ();
+        #[inline(always)]
+        fn with_simd<S: pulp::Simd>(self, _: S) {
+            amplitudes_in(self.modal, self.k, self.range, self.iv, self.out)
+        }
+    }
+    pulp::Arch::new().dispatch(Op {
+        modal,
+        k,
+        range,
+        iv,
+        out,
+    })
+}
+
+/// [`amplitudes`], inlined into the instruction set of its caller.
+#[inline(always)]
+fn amplitudes_in(
     modal: &Modal,
     k: &[[f64; 3]],
     range: std::ops::Range<usize>,
@@ -351,6 +393,42 @@ pub fn refine_at(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Stored intervals come back as stored, across the blocks of `Deferred::state` (a
+    /// `Deferred::new` one and a default one, held-contact loads on some).
+    #[test]
+    fn stored_intervals_come_back_across_blocks() {
+        let nm = 3;
+        let iv = |k: usize| Interval {
+            x0: (0..nm).map(|n| (k * 10 + n) as f64).collect(),
+            v0: (0..nm).map(|n| -((k * 10 + n) as f64)).collect(),
+            a0: k as f64,
+            a1: 2.0 * k as f64,
+            tau: 0.5,
+            fc: k.is_multiple_of(3).then(|| vec![k as f64 + 0.25; nm]),
+            tau_done: 0.25,
+        };
+        let n = 2 * STATE_BLOCK + 7;
+        for mut d in [
+            Deferred::new(nm),
+            Deferred {
+                nm,
+                ..Default::default()
+            },
+        ] {
+            for k in 0..n {
+                assert_eq!(d.store(&iv(k), k as f64 + 1.0), k);
+            }
+            for k in 0..n {
+                let (want, got) = (iv(k), d.interval(k));
+                assert_eq!(got.x0, &want.x0[..]);
+                assert_eq!(got.v0, &want.v0[..]);
+                assert_eq!(got.fc, want.fc.as_deref());
+                assert_eq!((got.a0, got.a1, got.tau), (want.a0, want.a1, want.tau));
+                assert_eq!((got.len, got.t_end), (0.25, k as f64 + 1.0));
+            }
+        }
+    }
 
     /// `Deferred::order` is the stable sort by decreasing upper bound under `total_cmp`.
     #[test]

@@ -173,15 +173,18 @@ impl Problem {
             })
             .collect();
         let n_steps = crate::rules::grid_steps(scene.duration, h) as usize;
-        let mut ag_start = vec![0.0; n_steps];
-        let mut ag_end = vec![0.0; n_steps];
+        // (Built up to the record's end, then zeros: no zeroing of what is overwritten.)
+        let mut ag_start = Vec::with_capacity(n_steps);
+        let mut ag_end = Vec::with_capacity(n_steps);
         if let Some(g) = &scene.ground {
             let covered = n_steps.min(g.npts().saturating_sub(1) * split);
             if split == 1 {
                 // The record's own grid (the common case): its samples as they are.
-                ag_start[..covered].copy_from_slice(&g.accel[..covered]);
-                ag_end[..covered].copy_from_slice(&g.accel[1..covered + 1]);
+                ag_start.extend_from_slice(&g.accel[..covered]);
+                ag_end.extend_from_slice(&g.accel[1..covered + 1]);
             } else {
+                ag_start.resize(covered, 0.0);
+                ag_end.resize(covered, 0.0);
                 // The record's linear pieces, each cut in `split` equal parts (the ends of a
                 // piece are its samples, exactly; the interior points as
                 // `structure::testing::refined` computes them, so a split record and a record
@@ -205,6 +208,8 @@ impl Problem {
                 }
             }
         }
+        ag_start.resize(n_steps, 0.0);
+        ag_end.resize(n_steps, 0.0);
         let full = StepCoeffs::new(&modal, h);
         let omega2 = modal.omega.iter().map(|w| w * w).collect();
         let gamma_norm = modal.gamma.iter().map(|g| g * g).sum::<f64>().sqrt();

@@ -88,9 +88,12 @@ pub struct Stepper<'a> {
     pub(super) pen: Vec<f64>,
     pub(super) xn: Vec<f64>,
     pub(super) vn: Vec<f64>,
-    /// Running peaks per building, floor (story) index, zero-padded to
-    /// [`super::modal::BuildingModes::padded_floors`] (as `stiffness` and the lower bounds).
-    pub(super) disp_max: Vec<Vec<f64>>,
+    /// Running peaks, floor (story) index, building b's at `b * fs` (`fs` floors each:
+    /// [`super::modal::BuildingModes::padded_floors`] of the widest building), zero-padded
+    /// (as `stiffness` and the lower bounds).
+    pub(super) disp_max: Vec<f64>,
+    /// The stride of the per-building floor buffers: the widest building's padded floors.
+    pub(super) fs: usize,
     /// The works of the accepted fast steps (input, damping) in four lane sums over the modes
     /// and steps, J, without their a·a terms; folded in by `finish`.
     pub(super) work_acc: [[f64; 4]; 2],
@@ -108,8 +111,8 @@ pub struct Stepper<'a> {
     /// Scratch of the fast step's interior checks: per mode the δ and δ̇ terms (before g).
     pub(super) check_d: Vec<f64>,
     pub(super) check_dd: Vec<f64>,
-    pub(super) shear_max: Vec<Vec<f64>>,
-    pub(super) stiffness: Vec<Vec<f64>>,
+    pub(super) shear_max: Vec<f64>,
+    pub(super) stiffness: Vec<f64>,
     pub(super) arcs: Vec<Arc>,
     /// [`Arc::trig`] of every arc at the segment end τ (shared by the end state and the
     /// damping integral).
@@ -120,14 +123,14 @@ pub struct Stepper<'a> {
     /// scratch (2 · [`ArcLanes::padded`]).
     pub(super) lanes: ArcLanes,
     pub(super) lane_buf: Vec<f64>,
-    /// Floor displacements and velocities at the current and at the previous sample, per
-    /// building. These four
-    /// buffers hold a leading zero (the ground) before the padded floors: floor i is at
-    /// index i + 1, so `[..P]` is the floor below each floor of `[1..]`.
-    pub(super) u: Vec<Vec<f64>>,
-    pub(super) ud: Vec<Vec<f64>>,
-    pub(super) u_prev: Vec<Vec<f64>>,
-    pub(super) ud_prev: Vec<Vec<f64>>,
+    /// Floor displacements and velocities at the current and at the previous sample, building
+    /// b's at `b * (fs + 1)`. Each building's part holds a leading zero (the ground) before
+    /// its padded floors: floor i is at index i + 1, so `[..P]` is the floor below each
+    /// floor of `[1..]`.
+    pub(super) u: Vec<f64>,
+    pub(super) ud: Vec<f64>,
+    pub(super) u_prev: Vec<f64>,
+    pub(super) ud_prev: Vec<f64>,
     /// The interval integrated since the previous sample (continuous peaks, [`peaks`]).
     pub(super) interval: peaks::Interval,
     /// Story-shear coefficients c_n = k_j (φ_n[j] − φ_n[j−1]) per building, story-major.
@@ -143,8 +146,8 @@ pub struct Stepper<'a> {
     pub(super) overlap_rows: Vec<Vec<f64>>,
     /// Running lower bounds of the peaks from deferred candidates (filters only), per
     /// building (floor / story), and of the overlap maxima per pair.
-    pub(super) disp_lower: Vec<Vec<f64>>,
-    pub(super) shear_lower: Vec<Vec<f64>>,
+    pub(super) disp_lower: Vec<f64>,
+    pub(super) shear_lower: Vec<f64>,
     pub(super) overlap_lower: Vec<f64>,
     /// Candidates for the continuous peaks, refined at the end ([`peaks::Deferred`]).
     pub(super) deferred: peaks::Deferred,
@@ -160,13 +163,13 @@ pub struct Stepper<'a> {
     /// clearing a flag per building).
     pub(super) amp_epoch: u64,
     pub(super) amp_k: Vec<[f64; 3]>,
-    /// Energy envelope of the observation ([`super::observe`]): per building, the inverse
-    /// flexibility norms 1/f_y of its floor displacements then story shears (each padded
-    /// with ∞ to the padded floors)
+    /// Energy envelope of the observation ([`super::observe`]): per building (at `2 b fs`),
+    /// the inverse flexibility norms 1/f_y of its floor displacements then story shears
+    /// (each padded with ∞ to its padded floors P, the shears at `2 b fs + P`)
     /// (f_y = √(Σ_n c_n²/ω_n²), m/√J resp. N/√J), ‖Γ_b‖ (kg^½), the envelope threshold
     /// min_y peak_y/f_y (√J; 0 until the first observation) and whether the previous
     /// sample was observed (else u_prev, u̇_prev are rebuilt from the interval start).
-    pub(super) env_inv: Vec<Vec<f64>>,
+    pub(super) env_inv: Vec<f64>,
     pub(super) env_gamma: Vec<f64>,
     pub(super) env_thr: Vec<f64>,
     /// Per building: a peak or lower bound grew since the threshold was computed.
@@ -287,6 +290,15 @@ impl<'a> Stepper<'a> {
         history: Option<&'a mut History>,
     ) -> Result<Self, SolverError> {
         let nm = p.modal.len();
+        let nb = p.modal.buildings.len();
+        // The per-building floor buffers' stride.
+        let fs = p
+            .modal
+            .buildings
+            .iter()
+            .map(|b| b.padded_floors())
+            .max()
+            .unwrap_or(0);
         let mut x = vec![0.0; nm];
         let mut v = vec![0.0; nm];
         for (b, bd) in scene.buildings.iter().enumerate() {
@@ -337,57 +349,26 @@ impl<'a> Stepper<'a> {
             fast_rejected: None,
             check_d: vec![0.0; nm],
             check_dd: vec![0.0; nm],
-            disp_max: p
-                .modal
-                .buildings
-                .iter()
-                .map(|b| vec![0.0; b.padded_floors()])
-                .collect(),
-            shear_max: p
-                .modal
-                .buildings
-                .iter()
-                .map(|b| vec![0.0; b.padded_floors()])
-                .collect(),
-            stiffness: p
-                .modal
-                .buildings
-                .iter()
-                .zip(&scene.buildings)
-                .map(|(bm, bd)| {
-                    let mut k = bd.story_stiffness.clone();
-                    k.resize(bm.padded_floors(), 0.0);
-                    k
-                })
-                .collect(),
-            u: p.modal
-                .buildings
-                .iter()
-                .map(|b| vec![0.0; b.padded_floors() + 1])
-                .collect(),
+            disp_max: vec![0.0; nb * fs],
+            fs,
+            shear_max: vec![0.0; nb * fs],
+            stiffness: {
+                let mut k = vec![0.0; nb * fs];
+                for (b, bd) in scene.buildings.iter().enumerate() {
+                    k[b * fs..b * fs + bd.story_stiffness.len()]
+                        .copy_from_slice(&bd.story_stiffness);
+                }
+                k
+            },
+            u: vec![0.0; nb * (fs + 1)],
             arcs: Vec::with_capacity(nm),
             trig_end: vec![[0.0; 3]; nm],
             memo: vec![TrigMemo::EMPTY; nm],
             lanes: ArcLanes::default(),
             lane_buf: vec![0.0; 2 * ArcLanes::padded(nm)],
-            ud: p
-                .modal
-                .buildings
-                .iter()
-                .map(|b| vec![0.0; b.padded_floors() + 1])
-                .collect(),
-            u_prev: p
-                .modal
-                .buildings
-                .iter()
-                .map(|b| vec![0.0; b.padded_floors() + 1])
-                .collect(),
-            ud_prev: p
-                .modal
-                .buildings
-                .iter()
-                .map(|b| vec![0.0; b.padded_floors() + 1])
-                .collect(),
+            ud: vec![0.0; nb * (fs + 1)],
+            u_prev: vec![0.0; nb * (fs + 1)],
+            ud_prev: vec![0.0; nb * (fs + 1)],
             interval: peaks::Interval {
                 x0: vec![0.0; nm],
                 v0: vec![0.0; nm],
@@ -396,18 +377,8 @@ impl<'a> Stepper<'a> {
             held_force: vec![0.0; p.contacts.len()],
             overlap_rows: Vec::new(),
             overlaps: OverlapTracker::new(scene),
-            disp_lower: p
-                .modal
-                .buildings
-                .iter()
-                .map(|b| vec![0.0; b.padded_floors()])
-                .collect(),
-            shear_lower: p
-                .modal
-                .buildings
-                .iter()
-                .map(|b| vec![0.0; b.padded_floors()])
-                .collect(),
+            disp_lower: vec![0.0; nb * fs],
+            shear_lower: vec![0.0; nb * fs],
             overlap_lower: Vec::new(),
             deferred: peaks::Deferred::new(nm),
             flags: Vec::new(),
@@ -507,8 +478,7 @@ impl<'a> Stepper<'a> {
         }
         st.overlap_lim = vec![0.0; st.overlap_runs.len()];
         st.overlap_turn = vec![0.0; st.overlaps.pairs.len()];
-        let widest = p.modal.buildings.iter().map(|b| b.padded_floors()).max();
-        st.flags = vec![0.0; 2 * widest.unwrap_or(0)];
+        st.flags = vec![0.0; 2 * fs];
         let w2 = &p.omega2;
         let inv_f = |c: &[f64], first: usize| {
             let f2: f64 = c
@@ -523,24 +493,21 @@ impl<'a> Stepper<'a> {
                 f64::MAX
             }
         };
-        st.env_inv = p
-            .modal
-            .buildings
-            .iter()
-            .enumerate()
-            .map(|(b, bm)| {
-                let (nf, nmb, first) = (bm.n_floors, bm.range.len(), bm.range.start);
-                let disp = (0..nf).map(|i| {
-                    let row: Vec<f64> = (0..nmb).map(|m| bm.phi[m * nf + i]).collect();
-                    inv_f(&row, first)
-                });
-                let shear =
-                    (0..nf).map(|i| inv_f(&st.shear_rows[b][i * nmb..(i + 1) * nmb], first));
-                // Padded floors: ∞ (their 0 · ∞ = NaN is never below the minimum).
-                let pad = || std::iter::repeat_n(f64::INFINITY, bm.padded_floors() - nf);
-                disp.chain(pad()).chain(shear).chain(pad()).collect()
-            })
-            .collect();
+        st.env_inv = vec![0.0; 2 * nb * fs];
+        for (b, bm) in p.modal.buildings.iter().enumerate() {
+            let (nf, nmb, first) = (bm.n_floors, bm.range.len(), bm.range.start);
+            let disp = (0..nf).map(|i| {
+                let row: Vec<f64> = (0..nmb).map(|m| bm.phi[m * nf + i]).collect();
+                inv_f(&row, first)
+            });
+            let shear = (0..nf).map(|i| inv_f(&st.shear_rows[b][i * nmb..(i + 1) * nmb], first));
+            // Padded floors: ∞ (their 0 · ∞ = NaN is never below the minimum).
+            let pad = || std::iter::repeat_n(f64::INFINITY, bm.padded_floors() - nf);
+            let inv = disp.chain(pad()).chain(shear).chain(pad());
+            for (e, v) in st.env_inv[2 * b * fs..].iter_mut().zip(inv) {
+                *e = v;
+            }
+        }
         st.overlap_inv = st.overlap_rows.iter().map(|r| inv_f(r, 0)).collect();
         st.energy.initial = p.modal.energy(&st.s.x, &st.s.v);
         for (c, ct) in p.contacts.iter().enumerate() {
@@ -579,8 +546,9 @@ impl<'a> Stepper<'a> {
             #[inline(always)]
             fn with_simd<S: pulp::Simd>(self, _: S) {
                 let st = self.st;
+                let o = st.fs + 1;
                 for (b, bm) in st.p.modal.buildings.iter().enumerate() {
-                    bm.to_floors(&st.s.v, &mut st.ud_prev[b][1..]);
+                    bm.to_floors(&st.s.v, &mut st.ud_prev[b * o + 1..(b + 1) * o]);
                 }
             }
         }
@@ -596,8 +564,8 @@ impl<'a> Stepper<'a> {
             .enumerate()
             .map(|(b, bd)| BuildingResponse {
                 name: bd.name.clone(),
-                story_shear_max: self.shear_max[b][..bd.n_floors()].to_vec(),
-                floor_displacement_max: self.disp_max[b][..bd.n_floors()].to_vec(),
+                story_shear_max: self.shear_max[b * self.fs..][..bd.n_floors()].to_vec(),
+                floor_displacement_max: self.disp_max[b * self.fs..][..bd.n_floors()].to_vec(),
                 ..Default::default()
             })
             .collect()
@@ -742,7 +710,7 @@ impl<'a> Stepper<'a> {
         impl pulp::WithSimd for Op<'_, '_> {
             type Output = Result<Option<Step>, SolverError>;
             #[inline(always)]
-            fn with_simd<S: pulp::Simd>(self, _: S) -> Self::Output {
+            fn with_simd<S: pulp::Simd>(self, simd: S) -> Self::Output {
                 // Consecutive fast steps in one dispatch: after an accepted step, the next
                 // one too if `advance` would take it on the fast path (the caller does
                 // nothing between `Reached` steps). A step found to need the closed form
@@ -751,7 +719,7 @@ impl<'a> Stepper<'a> {
                 let (mut j, mut t_end) = (self.j, self.t_end);
                 let mut accepted = false;
                 loop {
-                    match self.st.fast_step_body(j, t_end)? {
+                    match self.st.fast_step_body(simd, j, t_end)? {
                         None if accepted => {
                             self.st.fast_rejected = Some(j);
                             return Ok(Some(Step::Reached));
@@ -773,7 +741,12 @@ impl<'a> Stepper<'a> {
     }
 
     #[inline(always)]
-    fn fast_step_body(&mut self, j: usize, t_end: f64) -> Result<Option<Step>, SolverError> {
+    fn fast_step_body<S: pulp::Simd>(
+        &mut self,
+        simd: S,
+        j: usize,
+        t_end: f64,
+    ) -> Result<Option<Step>, SolverError> {
         let p = self.p;
         let (a0, a1) = (p.ag_start[j], p.ag_end[j]);
         let h = p.full.h;
@@ -963,7 +936,8 @@ impl<'a> Stepper<'a> {
         self.finish_grid(j, t_end);
         self.count_step(h)?;
         self.interval.tau_done = h;
-        self.observe();
+        // (In this instruction set already: no second dispatch.)
+        self.observe_with(simd);
         Ok(Some(Step::Reached))
     }
 
@@ -973,12 +947,17 @@ impl<'a> Stepper<'a> {
         let m = &self.p.modal;
         self.arcs.clear();
         self.memo.iter_mut().for_each(TrigMemo::clear);
-        for n in 0..m.len() {
+        // `Modal::arc` of every mode, the modal vectors cut once (no bounds checks in the
+        // loop).
+        let nm = m.len();
+        let (gamma, omega, zeta) = (&m.gamma[..nm], &m.omega[..nm], &m.zeta[..nm]);
+        let (series, x, v) = (&m.series[..nm], &self.s.x[..nm], &self.s.v[..nm]);
+        let fc = fc.map(|f| &f[..nm]);
+        self.arcs.extend((0..nm).map(|n| {
             let extra = fc.map_or(0.0, |f| f[n]);
-            let (f0, f1) = (-m.gamma[n] * a0 + extra, -m.gamma[n] * a1 + extra);
-            self.arcs
-                .push(m.arc(n, self.s.x[n], self.s.v[n], f0, f1, tau));
-        }
+            let (f0, f1) = (-gamma[n] * a0 + extra, -gamma[n] * a1 + extra);
+            Arc::new(omega[n], zeta[n], x[n], v[n], f0, f1, tau).series_if(series[n])
+        }));
         self.lanes.set(&self.arcs);
     }
 
