@@ -4,6 +4,7 @@
 #   make robustness  the long robustness sweep over every record (results/robustness)
 #   make yielding-strong  the yielding study of a stronger pair (results/yielding-strong)
 #   make opensees  the cross-checks against OpenSees (installs OpenSeesPy in target/; not in CI)
+#   make bench-table  the README's speed table from BENCH_RUNS (6) criterion runs (not in CI)
 # Nothing else is needed on a fresh machine than a Rust toolchain (cargo): plots use a font
 # committed in data/fonts, so no system font or fontconfig package is required.
 
@@ -53,16 +54,23 @@ bench:
 	$(CARGO) bench -p solvers
 
 # The README's speed table: the paper_scene group BENCH_RUNS times (machines are noisy: the
-# table gives fastest-of-N times and within-run ratios), then the table of the runs.
+# table gives fastest-of-N times and within-run ratios), each run's criterion files kept in
+# target/bench-runs/N (criterion writes them to CRITERION_HOME, set here so that a run's copy
+# is always its own), then the table of the runs, into target/bench-table.md and on screen.
 BENCH_RUNS ?= 6
+BENCH_HOME := $(CURDIR)/target/bench-criterion
 bench-table:
-	rm -rf target/bench-runs
+	rm -rf target/bench-runs target/bench-table.md
+	mkdir -p target/bench-runs
 	for i in $$(seq 1 $(BENCH_RUNS)); do \
-		$(CARGO) bench -p solvers --bench paper_scene && \
-		mkdir -p target/bench-runs && cp -r target/criterion/paper_scene target/bench-runs/$$i || exit 1; \
+		rm -rf $(BENCH_HOME) && \
+		CRITERION_HOME=$(BENCH_HOME) $(CARGO) bench -p solvers --bench paper_scene && \
+		cp -r $(BENCH_HOME)/paper_scene target/bench-runs/$$i || exit 1; \
 	done
-	$(CARGO) run --release -q -p solvers --example bench_table -- $$(ls -d target/bench-runs/* | sort -t/ -k3 -n) \
-		| tee target/bench-table.md
+	$(CARGO) run --release -q -p solvers --example bench_table -- \
+		$$(ls -d target/bench-runs/* | sort -t/ -k3 -n) > target/bench-table.tmp
+	mv target/bench-table.tmp target/bench-table.md
+	cat target/bench-table.md
 
 fmt:
 	$(CARGO) fmt --all

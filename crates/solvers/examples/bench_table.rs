@@ -32,10 +32,11 @@ fn median_ns(run: &std::path::Path, name: &str) -> Result<f64, String> {
         serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))
     };
     let id = read("benchmark.json")?;
-    if id["function_id"].as_str() != Some(name) {
+    if id["group_id"].as_str() != Some("paper_scene") || id["function_id"].as_str() != Some(name) {
         return Err(format!(
-            "{}: holds benchmark {}, expected {name}",
+            "{}: holds benchmark {}/{}, expected paper_scene/{name}",
             dir.join("benchmark.json").display(),
+            id["group_id"],
             id["function_id"]
         ));
     }
@@ -104,23 +105,49 @@ fn work(
     }
 }
 
-/// A time in ns as ms (three significant digits) or µs.
+/// `x` > 0 to three significant digits (rounded first, so 9.996 gives 10.0), without an
+/// exponent: 2.53, 10.6, 199, 1590.
+fn sig3(x: f64) -> String {
+    let digits = |y: f64| y.abs().log10().floor() as i32;
+    let scale = 10f64.powi(2 - digits(x));
+    let y = (x * scale).round() / scale;
+    let decimals = (2 - digits(y)).max(0) as usize;
+    format!("{y:.decimals$}")
+}
+
+/// A time in ns as ms, three significant digits.
 fn ms(ns: f64) -> String {
-    let m = ns * 1e-6;
-    if m >= 10.0 {
-        format!("{m:.1} ms")
+    format!("{} ms", sig3(ns * 1e-6))
+}
+
+/// A time per unit of work, three significant digits: ns, or µs from 1 000 ns (after
+/// rounding).
+fn per_unit(ns: f64) -> String {
+    if ns >= 999.5 {
+        format!("{} µs", sig3(ns * 1e-3))
     } else {
-        format!("{m:.2} ms")
+        format!("{} ns", sig3(ns))
     }
 }
 
-/// A time per unit of work, three significant digits (ns, or µs from 1 000 ns).
-fn per_unit(ns: f64) -> String {
-    match ns {
-        x if x >= 1000.0 => format!("{:.2} µs", x * 1e-3),
-        x if x >= 100.0 => format!("{x:.0} ns"),
-        x if x >= 10.0 => format!("{x:.1} ns"),
-        x => format!("{x:.2} ns"),
+/// The ratio of the times `slow` to `fast` (one of each per run): fastest against fastest,
+/// the least and largest ratio within a run, and how many runs reach `goal`.
+#[derive(Debug, PartialEq)]
+struct Ratio {
+    fastest: f64,
+    lo: f64,
+    hi: f64,
+    met: usize,
+}
+
+fn ratio(slow: &[f64], fast: &[f64], goal: f64) -> Ratio {
+    let min = |t: &[f64]| t.iter().copied().fold(f64::INFINITY, f64::min);
+    let within: Vec<f64> = slow.iter().zip(fast).map(|(s, f)| s / f).collect();
+    Ratio {
+        fastest: min(slow) / min(fast),
+        lo: min(&within),
+        hi: within.iter().copied().fold(0.0, f64::max),
+        met: within.iter().filter(|&&x| x >= goal).count(),
     }
 }
 
@@ -151,15 +178,9 @@ fn run() -> Result<(), String> {
     let n = runs.len();
     let fastest = |c: usize| t[c].iter().copied().fold(f64::INFINITY, f64::min);
     let slowest = |c: usize| t[c].iter().copied().fold(0.0, f64::max);
-    // Ratio of case a to case b: fastest against fastest, and its range within runs.
-    let ratio = |a: usize, b: usize| {
-        let within: Vec<f64> = (0..n).map(|r| t[a][r] / t[b][r]).collect();
-        let lo = within.iter().copied().fold(f64::INFINITY, f64::min);
-        let hi = within.iter().copied().fold(0.0, f64::max);
-        (fastest(a) / fastest(b), lo, hi, within)
-    };
+    let runs_word = if n == 1 { "run" } else { "runs" };
     println!(
-        "The `paper_scene` group in {n} runs of `cargo bench -p solvers --bench paper_scene`: the \
+        "The `paper_scene` group in {n} {runs_word} of `cargo bench -p solvers --bench paper_scene`: the \
          time is the fastest of the {n} criterion medians (slowest in brackets), the ratio is \
          fastest against fastest with its range within runs (each ratio within one run).\n"
     );
@@ -172,8 +193,8 @@ fn run() -> Result<(), String> {
         let x = if c == 0 {
             "1".to_string()
         } else {
-            let (r, lo, hi, _) = ratio(c, 0);
-            format!("{r:.1}× ({lo:.1}–{hi:.1}×)")
+            let r = ratio(&t[c], &t[0], f64::INFINITY);
+            format!("{:.1}× ({:.1}–{:.1}×)", r.fastest, r.lo, r.hi)
         };
         println!(
             "| `paper_scene/{name}` | {} ({}) | {x} | {w} | {} per {unit} |",
@@ -213,9 +234,11 @@ fn run() -> Result<(), String> {
             5.0,
         ),
     ] {
-        let (r, lo, hi, within) = ratio(slow, fast);
-        let met = within.iter().filter(|&&x| x >= goal).count();
-        println!("| {label} | {r:.1}× | {lo:.1}–{hi:.1}× | {met} of {n} |");
+        let r = ratio(&t[slow], &t[fast], goal);
+        println!(
+            "| {label} | {:.1}× | {:.1}–{:.1}× | {} of {n} |",
+            r.fastest, r.lo, r.hi, r.met
+        );
     }
     println!(
         "\nMedians of each run, ms ({}):\n",
@@ -271,7 +294,7 @@ mod tests {
         .unwrap();
         let e = median_ns(&run, "other").unwrap_err();
         assert!(
-            e.contains("holds benchmark \"momentum\", expected other"),
+            e.contains("holds benchmark \"paper_scene\"/\"momentum\", expected paper_scene/other"),
             "{e}"
         );
         // A median that is not a positive time.
@@ -296,5 +319,32 @@ mod tests {
         assert_eq!(per_unit(198.6), "199 ns");
         assert_eq!(per_unit(1591.0), "1.59 µs");
         assert_eq!(per_unit(9.87), "9.87 ns");
+        assert_eq!(ms(1.234e8), "123 ms");
+        assert_eq!(ms(9.996e6), "10.0 ms");
+        assert_eq!(per_unit(999.7), "1.00 µs");
+        assert_eq!(per_unit(9.996), "10.0 ns");
+    }
+
+    /// Ratios: fastest against fastest (not the best within-run ratio), the within-run
+    /// range, and the runs that reach the goal (exactly at it counts).
+    #[test]
+    fn ratios_are_fastest_against_fastest_with_the_within_run_range() {
+        // Run 2 is slow for both; run 3 fast for the fast case only.
+        let slow = [60.0, 70.0, 62.0];
+        let fast = [2.5, 2.8, 2.4];
+        let r = ratio(&slow, &fast, 25.0);
+        assert_eq!(r.fastest, 60.0 / 2.4);
+        assert_eq!((r.lo, r.hi), (24.0, 62.0 / 2.4));
+        assert_eq!(r.met, 2); // 24.0 (no), 25.0 (yes, exactly), 25.83 (yes)
+        let one = ratio(&[10.0], &[4.0], 10.0);
+        assert_eq!(
+            one,
+            Ratio {
+                fastest: 2.5,
+                lo: 2.5,
+                hi: 2.5,
+                met: 0
+            }
+        );
     }
 }

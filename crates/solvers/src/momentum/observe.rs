@@ -150,8 +150,11 @@ impl Stepper<'_> {
             self.observe_overlaps(simd, len, &mut stored);
         }
         // The current sample becomes the previous one (buffers exchanged). A skipped
-        // building's parts are exchanged too: they are not read before it is observed
-        // again, which rebuilds both from the modal state (`prev_valid` false).
+        // building's parts are exchanged too, stale (`prev_valid` false): its next
+        // observation over an interval (len > 0) rebuilds both from the interval's start
+        // before reading them; one of length 0 (an event at the interval's start) reads them
+        // only for rate sign changes, which it ignores (the slow path and the overlap
+        // extrema need len > 0), and its own sample becomes the previous one.
         std::mem::swap(&mut self.u_prev, &mut self.u);
         std::mem::swap(&mut self.ud_prev, &mut self.ud);
         if self.history.is_some() {
