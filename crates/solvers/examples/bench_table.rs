@@ -51,7 +51,8 @@ fn median_ns(run: &std::path::Path, name: &str) -> Result<f64, String> {
         })
 }
 
-/// The work of one run of a case (deterministic) and its unit, for the table.
+/// The work of one run of a case (deterministic) and its unit, for the table (`newmark`: the
+/// gap element with the Newmark integrator, counted in Newton iterations).
 fn work(
     out: &solvers::RunOutput,
     method: solvers::Method,
@@ -187,9 +188,11 @@ fn run() -> Result<(), String> {
     println!("| benchmark | time, fastest (slowest) of {n} | × momentum (range within runs) | work per run | per unit of work |");
     println!("|---|---|---|---|---|");
     for (c, (name, method, set)) in cases.iter().enumerate() {
-        let out = solvers::run(&paper(set), *method, None)
+        let scene = paper(set);
+        let out = solvers::run(&scene, *method, None)
             .map_err(|e| format!("{name}: the run for its work counts failed: {e}"))?;
-        let (w, units, unit) = work(&out, *method, name.starts_with("newmark"));
+        let newmark = scene.gap_element.integrator == structure::scene::Integrator::Newmark;
+        let (w, units, unit) = work(&out, *method, newmark);
         let x = if c == 0 {
             "1".to_string()
         } else {

@@ -657,7 +657,8 @@ impl ArcLanes {
         let np = Self::padded(n);
         self.n = n;
         // Each field's lanes: the arcs', then the padding's zeros (the buffers are kept from
-        // one call to the next, every lane written).
+        // one call to the next, every lane written; the padding zeroed by a loop, not by
+        // truncate and resize, whose fill is a memset call: +0.03 M instructions per run).
         for v in [
             &mut self.neg_c,
             &mut self.d,

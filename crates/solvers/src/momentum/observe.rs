@@ -350,7 +350,8 @@ impl Stepper<'_> {
         }
         if self.amp_valid[b] != self.amp_epoch {
             let r = bm.range.clone();
-            peaks::amplitudes(&p.modal, &self.amp_k, r, &self.interval, &mut self.obs_amp);
+            let (arch, iv) = (self.arch, &self.interval);
+            peaks::amplitudes(arch, &p.modal, &self.amp_k, r, iv, &mut self.obs_amp);
             self.amp_valid[b] = self.amp_epoch;
         }
         let bound = peaks::hermite_error_bound(&p.modal, first, coef, &self.obs_amp, len);
@@ -436,7 +437,8 @@ impl Stepper<'_> {
         for b in [l, r] {
             if self.amp_valid[b] != self.amp_epoch {
                 let range = modal.buildings[b].range.clone();
-                peaks::amplitudes(modal, &self.amp_k, range, &self.interval, &mut self.obs_amp);
+                let (arch, iv) = (self.arch, &self.interval);
+                peaks::amplitudes(arch, modal, &self.amp_k, range, iv, &mut self.obs_amp);
                 self.amp_valid[b] = self.amp_epoch;
             }
         }

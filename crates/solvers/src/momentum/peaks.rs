@@ -229,9 +229,10 @@ pub fn amplitude_constants(modal: &Modal) -> Vec<[f64; 3]> {
 /// `out[range]` ([`Arc::amplitude`] without the arcs; `k` from [`amplitude_constants`]):
 /// A = q₀ − α, B = (q̇₀ − β + ζωA)/ω_d with β = (f₁ − f₀)/(τω²), α = (f₀ − 2ζωβ)/ω². The
 /// products by reciprocals round differently from the arcs' divisions: these amplitudes
-/// feed error bounds only. In the widest instruction set ([`pulp::Arch`]; exact operations
+/// feed error bounds only. In the widest instruction set of `arch` (exact operations
 /// only, the same bits on every machine).
 pub fn amplitudes(
+    arch: pulp::Arch,
     modal: &Modal,
     k: &[[f64; 3]],
     range: std::ops::Range<usize>,
@@ -252,7 +253,7 @@ pub fn amplitudes(
             amplitudes_in(self.modal, self.k, self.range, self.iv, self.out)
         }
     }
-    pulp::Arch::new().dispatch(Op {
+    arch.dispatch(Op {
         modal,
         k,
         range,
