@@ -211,3 +211,44 @@ fn peaks_of_stiff_stories_under_a_coarse_record_are_continuous() {
         );
     }
 }
+
+/// The overlap audit is skipped when no pair can reach its running maximum. The overlap is
+/// o = y − gap with |y| ≤ f_y √(R_l² + R_r²), so the test compares f_y √(R_l² + R_r²) with
+/// maximum + gap: a pair whose floors have not yet met (negative maximum) must not keep the
+/// audit, and with it every building's sample, from being skipped. Counts (building samples
+/// over an interval, of them skipped, overlap audits skipped) pinned on three scenes: they
+/// are deterministic (exact operations, one thread) and the skip is exact
+/// (`energy_envelope_skip_leaves_every_peak_unchanged`).
+#[test]
+fn overlap_audit_is_skipped_below_maximum_plus_gap() {
+    let cases = [
+        // Before the gap was added to the maximum: 4933 and 2849 skipped.
+        (paper(&["contacts.0.gap=0.10"]), [16102, 5752, 5911]),
+        // 4314 and 2172.
+        (paper(&["contacts.0.gap=0.05"]), [16224, 5532, 4772]),
+        // A contact at every facing floor: no pair to audit.
+        (
+            structure::testing::paper_scene_aligned(&["contacts.0.gap=0.05"]),
+            [16184, 3277, 0],
+        ),
+    ];
+    for (s, want) in cases {
+        let (out, d) = solvers::momentum::solve_with_diagnostics(&s, None).unwrap();
+        let worst = out
+            .overlaps
+            .iter()
+            .map(|o| o.max_overlap)
+            .fold(f64::NEG_INFINITY, f64::max);
+        let got = [
+            d.building_samples,
+            d.building_samples_skipped,
+            d.overlap_audits_skipped,
+        ];
+        eprintln!(
+            "{}: {got:?}, largest overlap {worst:.3e} m, {} pairs",
+            s.name,
+            out.overlaps.len()
+        );
+        assert_eq!(got, want, "{}", s.name);
+    }
+}
