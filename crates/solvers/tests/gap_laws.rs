@@ -7,6 +7,7 @@ use structure::testing::two_oscillators;
 use structure::Scene;
 
 /// Two masses on springs so soft (1e-6 N/m) that they are free for the duration of a contact.
+#[allow(clippy::too_many_arguments)]
 fn pair(
     m1: f64,
     m2: f64,

@@ -27,6 +27,8 @@ pub fn free_scene(buildings: Vec<Building>, contacts: Vec<Contact>, duration: f6
 /// origin with velocity `v0` (m/s) toward the right one, at rest. One contact with `gap`
 /// (m) and restitution `cr`. First impact, for the left one alone moving:
 /// t₁ = asin(gap·ω₁/v0)/ω₁ (needs gap·ω₁ < v0).
+// The closed forms' own parameters, in their order.
+#[allow(clippy::too_many_arguments)]
 pub fn two_oscillators(
     m1: f64,
     k1: f64,

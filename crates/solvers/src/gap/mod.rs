@@ -515,6 +515,7 @@ pub(crate) fn audit(
 
 /// The common result of both gap-element integrators: impacts in time order, no persistent
 /// contacts or r_N (those belong to the momentum method).
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn output(
     sys: &System,
     scene: &Scene,

@@ -18,11 +18,10 @@
 //! R_b < min_y peak_y/f_y, no displacement or shear of the building can reach its running
 //! peak (exact or the lower bound of a pending candidate) in the interval: the sample and
 //! the extremum checks are skipped, exactly (the peaks are the same). The overlap audit
-//! is skipped likewise: a pair's overlap is o = y − gap with y = u_left − u_right and
-//! |y| ≤ f_y √(R_l² + R_r²), so it cannot reach its running maximum while
-//! f_y √(R_l² + R_r²) < maximum + gap for every pair (floors that have not yet met, with
-//! negative maxima, are skipped too); else every building is observed. Not used with a
-//! history, nor with held contacts (their forces are loads the bound does not include).
+//! is skipped likewise when f_y √(R_l² + R_r²) is below every pair's running maximum of
+//! y = u_left − u_right (the overlap is y − gap; the tracker keeps the maximum of y), else
+//! every building is observed. Not used with a history, nor with held contacts (their
+//! forces are loads the bound does not include).
 
 use super::peaks::{self, Candidate, Target};
 use super::stepper::Stepper;
@@ -208,20 +207,19 @@ impl Stepper<'_> {
             return (true, any);
         }
         if self.overlap_stale {
-            // Per run, the smallest (max(maximum, lower) + gap)/f_y of its pairs (0 if one
-            // is not positive): every pair of the run passes the test below iff this one
-            // does.
+            // Per run, the smallest max(maximum, lower)/f_y of its pairs (maxima of
+            // y = u_left − u_right; 0 if one is not positive): every pair of the run passes
+            // the test below iff this one does.
             // (Branch-free: all positive, then the least; the same value.)
             for (run, lim) in self.overlap_runs.iter().zip(&mut self.overlap_lim) {
                 let r = run.k0..run.k0 + run.n;
                 let (mx, mxt) = S::as_simd_f64s(&self.overlaps.max[r.clone()]);
                 let (lo, lot) = S::as_simd_f64s(&self.overlap_lower[r.clone()]);
-                let (inv, invt) = S::as_simd_f64s(&self.overlap_inv[r.clone()]);
-                let (gap, gapt) = S::as_simd_f64s(&self.overlap_gap[r]);
+                let (inv, invt) = S::as_simd_f64s(&self.overlap_inv[r]);
                 let (zero, inf) = (simd.splat_f64s(0.0), simd.splat_f64s(f64::INFINITY));
                 let (mut mv, mut bad) = (inf, simd.less_than_f64s(inf, zero));
-                for (((&a, &b), &f), &g) in mx.iter().zip(lo).zip(inv).zip(gap) {
-                    let l = simd.mul_f64s(simd.add_f64s(simd.max_f64s(a, b), g), f);
+                for ((&a, &b), &f) in mx.iter().zip(lo).zip(inv) {
+                    let l = simd.mul_f64s(simd.max_f64s(a, b), f);
                     bad = simd.or_m64s(bad, simd.not_m64s(simd.greater_than_f64s(l, zero)));
                     mv = simd.select_f64s(simd.less_than_f64s(l, mv), l, mv);
                 }
@@ -230,8 +228,8 @@ impl Stepper<'_> {
                 for &x in pulp::bytemuck::cast_slice::<S::f64s, f64>(std::slice::from_ref(&mv)) {
                     m = if x < m { x } else { m };
                 }
-                for (((&a, &b), &f), &g) in mxt.iter().zip(lot).zip(invt).zip(gapt) {
-                    let l = (a.max(b) + g) * f;
+                for ((&a, &b), &f) in mxt.iter().zip(lot).zip(invt) {
+                    let l = a.max(b) * f;
                     ok &= l > 0.0;
                     m = if l < m { l } else { m };
                 }
@@ -241,8 +239,7 @@ impl Stepper<'_> {
         }
         for (run, &lim) in self.overlap_runs.iter().zip(&self.overlap_lim) {
             let (rl, rr) = (self.env_r[run.left], self.env_r[run.right]);
-            // √(R_l² + R_r²) < (best + gap)/f_y, squared (best + gap > 0 needed, the bound
-            // is ≥ 0).
+            // √(R_l² + R_r²) < best/f_y, squared (best > 0 needed, the bound is ≥ 0).
             if !(lim > 0.0 && (rl * rl + rr * rr) * (1.0 + 1e-9) < lim * lim) {
                 // A pair may reach its maximum: observe every building.
                 return (false, false);

@@ -94,6 +94,16 @@ pub fn contact_forces(
     })
 }
 
+/// A held trial ([`Stepper::held_trial`]): the modal loads −Σ_c g_c λ_c of the holding
+/// forces, the modal state at its end, and the holding forces λ (N, one per held contact,
+/// in the order of the set).
+pub(super) struct HeldTrial {
+    pub loads: Vec<f64>,
+    pub x: Vec<f64>,
+    pub v: Vec<f64>,
+    pub forces: Vec<f64>,
+}
+
 impl Stepper<'_> {
     /// Instantaneous holding forces λ = W⁻¹ δ̈_free (N per unit modal mass, > 0 compressive)
     /// of the contacts `set` in the state (x, v) under ground acceleration `a_g`, and for
@@ -129,13 +139,8 @@ impl Stepper<'_> {
     }
 
     /// The held trajectory over [0, s] from the current state: constant forces that bring
-    /// every held gap back to δ = 0 at s (see [`persistent`]). Returns the modal loads of
-    /// the forces and the state at s.
-    pub(super) fn held_trial(
-        &self,
-        set: &[usize],
-        s: f64,
-    ) -> Result<(Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>), SolverError> {
+    /// every held gap back to δ = 0 at s (see [`persistent`]).
+    pub(super) fn held_trial(&self, set: &[usize], s: f64) -> Result<HeldTrial, SolverError> {
         let (p, m) = (self.p, &self.p.modal);
         let (a0, a1) = (
             p.ground(self.s.j, self.s.t),
@@ -167,7 +172,12 @@ impl Stepper<'_> {
         for n in 0..m.len() {
             (x[n], v[n]) = arc(n, fc[n]).xv(s);
         }
-        Ok((fc, x, v, lam))
+        Ok(HeldTrial {
+            loads: fc,
+            x,
+            v,
+            forces: lam,
+        })
     }
 
     /// Smallest holding force (relative to its tolerance) at the end of the held trial of
@@ -178,8 +188,8 @@ impl Stepper<'_> {
         s: f64,
     ) -> Result<(f64, usize), SolverError> {
         let (x, v) = if s > 0.0 {
-            let (_, x, v, _) = self.held_trial(set, s)?;
-            (x, v)
+            let t = self.held_trial(set, s)?;
+            (t.x, t.v)
         } else {
             (self.s.x.clone(), self.s.v.clone())
         };
@@ -255,7 +265,11 @@ impl Stepper<'_> {
                 return Ok(self.release(c));
             }
         }
-        let (fc, _, _, lam) = self.held_trial(&set, s_hold)?;
+        let HeldTrial {
+            loads: fc,
+            forces: lam,
+            ..
+        } = self.held_trial(&set, s_hold)?;
         let full = s_hold == tau;
         let t_stop = if full { t_end } else { self.s.t + s_hold };
         for (&c, &l) in set.iter().zip(&lam) {

@@ -185,8 +185,6 @@ pub struct Stepper<'a> {
     pub(super) arch: pulp::Arch,
     /// Per overlap pair: 1/f_y of u_left − u_right; per building: scratch envelope radius.
     pub(super) overlap_inv: Vec<f64>,
-    /// Per overlap pair: its gap, m (the overlap is u_left − u_right − gap).
-    pub(super) overlap_gap: Vec<f64>,
     pub(super) env_r: Vec<f64>,
     pub(super) skip: Vec<bool>,
     /// 2E_b per building at the start of the interval being observed: from the fast path's
@@ -197,8 +195,9 @@ pub struct Stepper<'a> {
     /// The overlap pairs as runs of consecutive pairs whose floors both step by one (the
     /// paper scene's 14 pairs are one run): the first pass of the audit over slices.
     pub(super) overlap_runs: Vec<OverlapRun>,
-    /// Per run: min_k (max(maximum_k, lower_k) + gap_k)/f_y,k over its pairs (0 if one is
-    /// not positive yet), recomputed when a maximum or a lower bound grew (`overlap_stale`).
+    /// Per run: min_k max(maximum_k, lower_k)/f_y,k over its pairs (maxima of
+    /// u_left − u_right; 0 if some pair has no positive one yet), recomputed when a maximum
+    /// or a lower bound grew (`overlap_stale`).
     pub(super) overlap_lim: Vec<f64>,
     pub(super) overlap_stale: bool,
     /// Per overlap pair: its rate turned from + to − over the interval (1) or not (0).
@@ -412,7 +411,6 @@ impl<'a> Stepper<'a> {
             prev_valid: vec![false; p.modal.buildings.len()],
             arch: pulp::Arch::new(),
             overlap_inv: Vec::new(),
-            overlap_gap: Vec::new(),
             env_r: vec![0.0; p.modal.buildings.len()],
             skip: vec![false; p.modal.buildings.len()],
             env_e2: vec![0.0; p.modal.buildings.len()],
@@ -518,7 +516,6 @@ impl<'a> Stepper<'a> {
             }
         }
         st.overlap_inv = st.overlap_rows.iter().map(|r| inv_f(r, 0)).collect();
-        st.overlap_gap = st.overlaps.pairs.iter().map(|op| op.gap).collect();
         st.energy.initial = p.modal.energy(&st.s.x, &st.s.v);
         for (c, ct) in p.contacts.iter().enumerate() {
             let d = ct.delta(&st.s.x);

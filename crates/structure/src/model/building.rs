@@ -280,10 +280,10 @@ impl Building {
     pub fn strain_energy(&self, u: &[f64]) -> f64 {
         let mut below = 0.0;
         let mut e = 0.0;
-        for j in 0..self.n_floors() {
-            let d = u[j] - below;
-            e += 0.5 * self.story_stiffness[j] * d * d;
-            below = u[j];
+        for (&uj, &k) in u.iter().zip(&self.story_stiffness).take(self.n_floors()) {
+            let d = uj - below;
+            e += 0.5 * k * d * d;
+            below = uj;
         }
         e
     }

@@ -250,7 +250,8 @@ impl Study for Gap {
         let momc = |rec: &str, g: f64| mom(ctx, &d, rec, g);
         let gelc = |rec: &str, g: f64| gel(ctx, &d, rec, g);
         let mut curves: Vec<Vec<(f64, Spread)>> = vec![Vec::new(); 4];
-        let mut class_curves: Vec<(PulseClass, [Vec<(f64, Spread)>; 2])> = Vec::new();
+        type Curve = Vec<(f64, Spread)>;
+        let mut class_curves: Vec<(PulseClass, [Curve; 2])> = Vec::new();
         for c in [PulseClass::Pulse, PulseClass::NoPulse] {
             class_curves.push((c, [Vec::new(), Vec::new()]));
         }

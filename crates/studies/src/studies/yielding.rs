@@ -642,7 +642,8 @@ impl Study for Yielding {
             ],
         );
         // (reference index, quantity) -> [(pga, share)], [(pga, spread)]
-        let mut shares: Vec<(usize, Quantity, Vec<(f64, f64)>, Vec<(f64, Spread)>)> = Vec::new();
+        type Shares = (usize, Quantity, Vec<(f64, f64)>, Vec<(f64, Spread)>);
+        let mut shares: Vec<Shares> = Vec::new();
         for (ri, _) in d.inelastic.iter().enumerate() {
             let mi = ri + 1;
             for q in Quantity::ALL {
