@@ -272,55 +272,79 @@ fn stem(origin: &str) -> String {
 /// A numeric token with its position.
 struct Token<'a> {
     text: &'a str,
-    /// 1-based character column.
-    column: usize,
+    /// The line it is on, and its byte offset there.
+    line: &'a str,
+    start: usize,
+}
+
+impl Token<'_> {
+    /// 1-based character column (for messages only: counted when asked).
+    fn column(&self) -> usize {
+        self.line.get(..self.start).map_or(0, |p| p.chars().count()) + 1
+    }
 }
 
 /// Split a data line into numeric tokens: separated by whitespace (and commas if
 /// `commas`), and split further before a sign that is neither at the token start nor right
-/// after an exponent letter (`1.2340E-02-5.6780E-03` → two values).
+/// after an exponent letter (`1.2340E-02-5.6780E-03` → two values). One pass over the line
+/// (an ASCII line, as record files are, by bytes: the same characters without decoding).
 fn tokens(line: &str, commas: bool) -> Vec<Token<'_>> {
-    let is_sep = |c: char| c.is_whitespace() || (commas && (c == ',' || c == ';'));
-    // Whitespace/comma-separated pieces as byte ranges.
-    let mut raw: Vec<(usize, usize)> = Vec::new();
-    let mut start: Option<usize> = None;
-    for (i, c) in line.char_indices() {
-        if is_sep(c) {
-            if let Some(s) = start.take() {
-                raw.push((s, i));
-            }
-        } else if start.is_none() {
-            start = Some(i);
-        }
+    let mut out = Vec::new();
+    if line.is_ascii() {
+        scan(
+            line,
+            line.bytes().map(char::from).enumerate(),
+            commas,
+            &mut out,
+        );
+    } else {
+        scan(line, line.char_indices(), commas, &mut out);
     }
-    if let Some(s) = start {
-        raw.push((s, line.len()));
-    }
-    // Split each piece before a sign that does not follow an exponent letter.
-    let mut cuts: Vec<(usize, usize)> = Vec::new();
-    for (s, e) in raw {
-        let mut piece_start = s;
-        let mut prev: Option<char> = None;
-        for (j, c) in line.get(s..e).unwrap_or("").char_indices() {
-            if (c == '-' || c == '+') && j > 0 && !matches!(prev, Some('e' | 'E' | 'd' | 'D')) {
-                cuts.push((piece_start, s + j));
-                piece_start = s + j;
-            }
-            prev = Some(c);
-        }
-        cuts.push((piece_start, e));
-    }
-    cuts.into_iter()
-        .filter(|(s, e)| e > s)
-        .filter_map(|(s, e)| {
-            let text = line.get(s..e)?;
-            let column = line.get(..s).map_or(0, |p| p.chars().count()) + 1;
-            Some(Token { text, column })
-        })
-        .collect()
+    out
 }
 
-/// Parse one number (Fortran `D` exponents accepted).
+fn scan<'a>(
+    line: &'a str,
+    chars: impl Iterator<Item = (usize, char)>,
+    commas: bool,
+    out: &mut Vec<Token<'a>>,
+) {
+    let is_sep = |c: char| c.is_whitespace() || (commas && (c == ',' || c == ';'));
+    let mut push = |s: usize, e: usize| {
+        if let Some(text) = line.get(s..e).filter(|t| !t.is_empty()) {
+            out.push(Token {
+                text,
+                line,
+                start: s,
+            });
+        }
+    };
+    // The open piece's start, and the character before this one in the piece.
+    let mut start: Option<usize> = None;
+    let mut prev: Option<char> = None;
+    for (i, c) in chars {
+        if is_sep(c) {
+            if let Some(s) = start.take() {
+                push(s, i);
+            }
+            continue;
+        }
+        match start {
+            None => start = Some(i),
+            Some(s) => {
+                if (c == '-' || c == '+') && !matches!(prev, Some('e' | 'E' | 'd' | 'D')) {
+                    push(s, i);
+                    start = Some(i);
+                }
+            }
+        }
+        prev = Some(c);
+    }
+    if let Some(s) = start {
+        push(s, line.len());
+    }
+}
+
 fn parse_number(text: &str) -> Option<f64> {
     if text.contains(['d', 'D']) {
         text.replace(['d', 'D'], "E").parse().ok()
@@ -341,7 +365,7 @@ fn value(tok: &Token<'_>, origin: &str, line: usize, expected: &str) -> Result<f
         None => Err(RecordError::Value {
             origin: origin.to_string(),
             line,
-            column: tok.column,
+            column: tok.column(),
             expected: expected.to_string(),
             found: clip(tok.text),
         }),
@@ -516,14 +540,10 @@ impl GroundMotion {
         }
         let mut accel = Vec::with_capacity(npts.min(1 << 24));
         let mut last_line = 4;
+        let expected = format!("a number (acceleration in {units})");
         for (ln, l) in lines {
             for tok in tokens(l, false) {
-                let v = value(
-                    &tok,
-                    origin,
-                    ln,
-                    &format!("a number (acceleration in {units})"),
-                )?;
+                let v = value(&tok, origin, ln, &expected)?;
                 accel.push(v * units.to_si());
                 last_line = ln;
             }
@@ -562,6 +582,7 @@ impl GroundMotion {
         let mut times: Vec<(f64, usize)> = Vec::new();
         let mut accel = Vec::new();
         let mut any = false;
+        let expected_accel = format!("a number (acceleration in {units})");
         for (i, raw) in text.lines().enumerate() {
             let ln = i + 1;
             let l = raw.split('#').next().unwrap_or("");
@@ -573,8 +594,8 @@ impl GroundMotion {
             let toks = tokens(l, true);
             if toks.len() != 2 {
                 let (column, found) = match toks.get(2) {
-                    Some(t) => (t.column, l.trim().to_string()),
-                    None => (toks.first().map_or(1, |t| t.column), l.trim().to_string()),
+                    Some(t) => (t.column(), l.trim().to_string()),
+                    None => (toks.first().map_or(1, |t| t.column()), l.trim().to_string()),
                 };
                 return Err(RecordError::Value {
                     origin: origin.to_string(),
@@ -591,12 +612,7 @@ impl GroundMotion {
                 });
             }
             let t = value(&toks[0], origin, ln, "a number (time in s)")?;
-            let a = value(
-                &toks[1],
-                origin,
-                ln,
-                &format!("a number (acceleration in {units})"),
-            )?;
+            let a = value(&toks[1], origin, ln, &expected_accel)?;
             times.push((t, ln));
             accel.push(a * units.to_si());
         }
@@ -662,19 +678,13 @@ impl GroundMotion {
         let mut accel = Vec::new();
         let mut last_line = 1;
         let mut any = false;
+        let expected = format!("a number (acceleration in {units})");
         for (i, raw) in text.lines().enumerate() {
             let ln = i + 1;
             let l = raw.split('#').next().unwrap_or("");
             any |= !raw.trim().is_empty();
             for tok in tokens(l, true) {
-                accel.push(
-                    value(
-                        &tok,
-                        origin,
-                        ln,
-                        &format!("a number (acceleration in {units})"),
-                    )? * units.to_si(),
-                );
+                accel.push(value(&tok, origin, ln, &expected)? * units.to_si());
                 last_line = ln;
             }
         }
@@ -818,12 +828,69 @@ fn quadratic_roots(a: f64, b: f64, c: f64) -> Vec<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
+
+    /// The two-pass tokenizer this one replaced (separators first, then sign splits, the
+    /// column counted for every token): the reference of the property below.
+    fn tokens_two_pass(line: &str, commas: bool) -> Vec<(&str, usize)> {
+        let is_sep = |c: char| c.is_whitespace() || (commas && (c == ',' || c == ';'));
+        let mut raw: Vec<(usize, usize)> = Vec::new();
+        let mut start: Option<usize> = None;
+        for (i, c) in line.char_indices() {
+            if is_sep(c) {
+                if let Some(s) = start.take() {
+                    raw.push((s, i));
+                }
+            } else if start.is_none() {
+                start = Some(i);
+            }
+        }
+        if let Some(s) = start {
+            raw.push((s, line.len()));
+        }
+        let mut cuts: Vec<(usize, usize)> = Vec::new();
+        for (s, e) in raw {
+            let mut piece_start = s;
+            let mut prev: Option<char> = None;
+            for (j, c) in line.get(s..e).unwrap_or("").char_indices() {
+                if (c == '-' || c == '+') && j > 0 && !matches!(prev, Some('e' | 'E' | 'd' | 'D')) {
+                    cuts.push((piece_start, s + j));
+                    piece_start = s + j;
+                }
+                prev = Some(c);
+            }
+            cuts.push((piece_start, e));
+        }
+        cuts.into_iter()
+            .filter(|(s, e)| e > s)
+            .filter_map(|(s, e)| {
+                let text = line.get(s..e)?;
+                Some((text, line.get(..s).map_or(0, |p| p.chars().count()) + 1))
+            })
+            .collect()
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 2000, ..ProptestConfig::default() })]
+        /// Tokens and columns as the two-pass tokenizer gives them, on lines of digits,
+        /// signs, exponent letters, separators (ASCII, commas, a no-break and an ideographic
+        /// space) and other letters.
+        #[test]
+        fn one_pass_tokens_are_the_two_pass_tokens(
+            line in "[0-9.eEdD+\\- \t,;x\u{a0}\u{3000}é]{0,40}",
+            commas in any::<bool>(),
+        ) {
+            let got: Vec<(&str, usize)> =
+                tokens(&line, commas).iter().map(|t| (t.text, t.column())).collect();
+            prop_assert_eq!(got, tokens_two_pass(&line, commas));
+        }
+    }
 
     #[test]
     fn split_stuck_negatives() {
         let t: Vec<_> = tokens("1.2340E-02-5.6780E-03 -1.0", false)
             .into_iter()
-            .map(|t| (t.text, t.column))
+            .map(|t| (t.text, t.column()))
             .collect();
         assert_eq!(
             t,
