@@ -119,6 +119,32 @@ fn calibration_hits_both_targets() {
     }
 }
 
+/// Calibrations are remembered per process by (floors, mass, f₁, f₂): a second call, under
+/// another name and damping ratio, gives the same stiffnesses bit for bit, and inputs that
+/// differ in any one of the four keys get their own calibration, each on its targets.
+#[test]
+fn remembered_calibrations_are_keyed_by_every_input() {
+    let a = calibrate_two_frequencies("a", 12, 1.3e6, 0.7, 2.4, 0.05).unwrap();
+    let again = calibrate_two_frequencies("other", 12, 1.3e6, 0.7, 2.4, 0.02).unwrap();
+    assert_eq!(a.building.story_stiffness, again.building.story_stiffness);
+    assert_eq!(again.building.name, "other");
+    assert_eq!(
+        again.building.damping,
+        structure::model::Damping::Uniform(0.02)
+    );
+    for (n, m, f1, f2) in [
+        (13, 1.3e6, 0.7, 2.4),
+        (12, 1.4e6, 0.7, 2.4),
+        (12, 1.3e6, 0.75, 2.4),
+        (12, 1.3e6, 0.7, 2.5),
+    ] {
+        let c = calibrate_two_frequencies("b", n, m, f1, f2, 0.05).unwrap();
+        assert_ne!(c.building.story_stiffness, a.building.story_stiffness);
+        let f = c.building.modes().unwrap().frequencies_hz();
+        assert!((f[0] - f1).abs() / f1 < 1e-12 && (f[1] - f2).abs() / f2 < 1e-12);
+    }
+}
+
 #[test]
 fn calibration_rejects_unreachable_targets() {
     assert!(calibrate_two_frequencies("b", 15, 1e6, 1.0, 1.2, 0.05).is_err());

@@ -80,6 +80,17 @@ pub fn calibrate_two_frequencies(
             "targets must satisfy 0 < f1 < f2, got {f1_hz} and {f2_hz} Hz"
         )));
     }
+    // The same inputs give the same (K, β) bit for bit: remembered per process, since every
+    // study case loads its scene anew (a building's calibration is ~50 eigenproblems).
+    let key = (n, mass.to_bits(), f1_hz.to_bits(), f2_hz.to_bits());
+    let memo = || TWO_FREQUENCIES.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some(&(k, beta)) = memo().get(&key) {
+        return Ok(Calibration {
+            building: Building::new(name, vec![mass; n], profile(n, k, beta), zeta),
+            k_base: k,
+            taper: beta,
+        });
+    }
     let k0 = 1.0e9;
     let ratio_at = |beta: f64| -> Result<f64, ModelError> {
         let b = Building::new(name, vec![mass; n], profile(n, k0, beta), zeta);
@@ -109,12 +120,20 @@ pub fn calibrate_two_frequencies(
     let (w1, _) = first_two(&b0)?;
     let k = k0 * (2.0 * std::f64::consts::PI * f1_hz / w1).powi(2);
     let building = Building::new(name, vec![mass; n], profile(n, k, beta), zeta);
+    memo().insert(key, (k, beta));
     Ok(Calibration {
         building,
         k_base: k,
         taper: beta,
     })
 }
+
+/// (K, β) of [`calibrate_two_frequencies`] by (floors, floor mass, f₁, f₂) as bit patterns
+/// (the frequencies do not depend on the name or the damping ratio).
+type TwoFrequencyKey = (usize, u64, u64, u64);
+static TWO_FREQUENCIES: std::sync::LazyLock<
+    std::sync::Mutex<std::collections::HashMap<TwoFrequencyKey, (f64, f64)>>,
+> = std::sync::LazyLock::new(Default::default);
 
 /// Builds an `n`-floor stick of uniform floor mass `mass` (kg) with a linear stiffness taper
 /// whose top story is `top_ratio` (dimensionless, > 0) times its ground story, scaled so that
