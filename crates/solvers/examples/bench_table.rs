@@ -160,6 +160,26 @@ fn main() {
 }
 
 fn run() -> Result<(), String> {
+    let table = table()?;
+    // Written whole, once every run has been read: no partial table. A reader that stops
+    // early (`| head`) is not an error.
+    use std::io::Write;
+    match std::io::stdout().lock().write_all(table.as_bytes()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(format!("stdout: {e}")),
+        _ => Ok(()),
+    }
+}
+
+/// The table (Markdown) of the runs named on the command line.
+fn table() -> Result<String, String> {
+    let mut out = String::new();
+    // One line of the table.
+    macro_rules! say {
+        ($($t:tt)*) => {{
+            out.push_str(&format!($($t)*));
+            out.push('\n');
+        }};
+    }
     let runs: Vec<std::path::PathBuf> = std::env::args().skip(1).map(Into::into).collect();
     if runs.is_empty() {
         return Err(
@@ -180,13 +200,13 @@ fn run() -> Result<(), String> {
     let fastest = |c: usize| t[c].iter().copied().fold(f64::INFINITY, f64::min);
     let slowest = |c: usize| t[c].iter().copied().fold(0.0, f64::max);
     let runs_word = if n == 1 { "run" } else { "runs" };
-    println!(
+    say!(
         "The `paper_scene` group in {n} {runs_word} of `cargo bench -p solvers --bench paper_scene`: the \
          time is the fastest of the {n} criterion medians (slowest in brackets), the ratio is \
          fastest against fastest with its range within runs (each ratio within one run).\n"
     );
-    println!("| benchmark | time, fastest (slowest) of {n} | × momentum (range within runs) | work per run | per unit of work |");
-    println!("|---|---|---|---|---|");
+    say!("| benchmark | time, fastest (slowest) of {n} | × momentum (range within runs) | work per run | per unit of work |");
+    say!("|---|---|---|---|---|");
     for (c, (name, method, set)) in cases.iter().enumerate() {
         let scene = paper(set);
         let out = solvers::run(&scene, *method, None)
@@ -199,7 +219,7 @@ fn run() -> Result<(), String> {
             let r = ratio(&t[c], &t[0], f64::INFINITY);
             format!("{:.1}× ({:.1}–{:.1}×)", r.fastest, r.lo, r.hi)
         };
-        println!(
+        say!(
             "| `paper_scene/{name}` | {} ({}) | {x} | {w} | {} per {unit} |",
             ms(fastest(c)),
             ms(slowest(c)),
@@ -218,10 +238,8 @@ fn run() -> Result<(), String> {
         idx("gap/k=1e10/tol=1e-4"),
         idx("newmark/k=1e10/dt=1e-3"),
     );
-    println!(
-        "\n| target (issue 10) | fastest against fastest | range within runs | runs meeting it |"
-    );
-    println!("|---|---|---|---|");
+    say!("\n| target (issue 10) | fastest against fastest | range within runs | runs meeting it |");
+    say!("|---|---|---|---|");
     for (label, slow, fast, goal) in [
         (
             "momentum ≥ 10× the adaptive gap element at k = 1e12 N/m",
@@ -238,20 +256,23 @@ fn run() -> Result<(), String> {
         ),
     ] {
         let r = ratio(&t[slow], &t[fast], goal);
-        println!(
+        say!(
             "| {label} | {:.1}× | {:.1}–{:.1}× | {} of {n} |",
-            r.fastest, r.lo, r.hi, r.met
+            r.fastest,
+            r.lo,
+            r.hi,
+            r.met
         );
     }
-    println!(
+    say!(
         "\nMedians of each run, ms ({}):\n",
         cases.iter().map(|c| c.0).collect::<Vec<_>>().join(", ")
     );
     for r in 0..n {
         let row: Vec<String> = t.iter().map(|tc| format!("{:.3}", tc[r] * 1e-6)).collect();
-        println!("- run {}: {}", r + 1, row.join(", "));
+        say!("- run {}: {}", r + 1, row.join(", "));
     }
-    Ok(())
+    Ok(out)
 }
 
 #[cfg(test)]
