@@ -76,9 +76,11 @@ fmt:
 	$(CARGO) fmt --all
 
 # Clippy with warnings as errors (CI runs it); the lints allowed workspace-wide, with the
-# reason, are in Cargo.toml's [workspace.lints.clippy].
+# reason, are in Cargo.toml's [workspace.lints.clippy]. In its own target folder: on a clean
+# clone, cargo's cached compiler probe (target/.rustc_info.json) written during a clippy run
+# once held a failed probe of the plain compiler, and the next cargo test stopped on it.
 clippy:
-	$(CARGO) clippy --release --workspace --all-targets -- -D warnings
+	$(CARGO) clippy --release --workspace --all-targets --target-dir target/clippy -- -D warnings
 
 clean:
 	$(CARGO) clean

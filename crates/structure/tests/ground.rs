@@ -313,6 +313,41 @@ fn error_load_names_file() {
     msg_has(&e, &["two_column.txt line "]);
 }
 
+/// Loaded records are remembered per process by (bytes, file name, format): the same file
+/// loads the same record; a file rewritten with other values, or read with another format,
+/// is parsed anew; a refused file is not remembered (fixed, it loads).
+#[test]
+fn remembered_records_follow_the_file_and_the_format() {
+    let dir = std::env::temp_dir().join(format!("pound-record-memo-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let f = dir.join("rec.txt");
+    let one = |dt: f64| RecordFormat::OneColumn {
+        dt,
+        units: Units::MetersPerSecond2,
+    };
+    std::fs::write(&f, "0.1 0.2 0.3\n").unwrap();
+    let a = GroundMotion::load(&f, &one(0.01)).unwrap();
+    assert_eq!(a.accel, vec![0.1, 0.2, 0.3]);
+    assert_eq!(GroundMotion::load(&f, &one(0.01)).unwrap(), a);
+    // Another format of the same bytes.
+    assert_eq!(GroundMotion::load(&f, &one(0.02)).unwrap().dt, 0.02);
+    // The file rewritten.
+    std::fs::write(&f, "0.1 0.2 0.4\n").unwrap();
+    assert_eq!(
+        GroundMotion::load(&f, &one(0.01)).unwrap().accel,
+        vec![0.1, 0.2, 0.4]
+    );
+    // Refused, then fixed.
+    std::fs::write(&f, "0.1 x 0.4\n").unwrap();
+    assert!(GroundMotion::load(&f, &one(0.01)).is_err());
+    std::fs::write(&f, "0.1 0.5 0.4\n").unwrap();
+    assert_eq!(
+        GroundMotion::load(&f, &one(0.01)).unwrap().accel,
+        vec![0.1, 0.5, 0.4]
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 // ---------------------------------------------------------------------------------------
 // Two-column and one-column
 // ---------------------------------------------------------------------------------------

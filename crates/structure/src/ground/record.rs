@@ -88,6 +88,15 @@ pub enum RecordFormat {
     OneColumn { dt: f64, units: Units },
 }
 
+/// Records parsed by [`GroundMotion::load`] in this process, by (file bytes, file name,
+/// format); forgotten all at once past [`RECORDS_KEPT`] (the 60 records of the studies take
+/// about 8 MB with their bytes).
+type RecordKey = (Vec<u8>, String, String);
+static RECORDS: std::sync::LazyLock<
+    std::sync::Mutex<std::collections::HashMap<RecordKey, GroundMotion>>,
+> = std::sync::LazyLock::new(Default::default);
+const RECORDS_KEPT: usize = 128;
+
 /// A uniformly sampled ground acceleration record.
 #[derive(Debug, Clone, PartialEq)]
 pub struct GroundMotion {
@@ -463,18 +472,33 @@ impl GroundMotion {
             path: path.display().to_string(),
             error,
         })?;
-        let text = String::from_utf8_lossy(&bytes);
         let origin = path.file_name().map_or_else(
             || path.display().to_string(),
             |f| f.to_string_lossy().into_owned(),
         );
-        match *format {
-            RecordFormat::At2 => Self::from_at2_str(&text, &origin),
-            RecordFormat::TwoColumn { units } => Self::from_two_column_str(&text, &origin, units),
-            RecordFormat::OneColumn { dt, units } => {
-                Self::from_one_column_str(&text, &origin, dt, units)
-            }
+        // Every study case loads its scene, and with it its record: a file read before with
+        // the same bytes, name and format is not parsed again (the key holds the bytes
+        // themselves, so a changed file is read anew).
+        let key = (bytes, origin, format!("{format:?}"));
+        let memo = || RECORDS.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(g) = memo().get(&key) {
+            return Ok(g.clone());
         }
+        let (bytes, origin, _) = &key;
+        let text = String::from_utf8_lossy(bytes);
+        let g = match *format {
+            RecordFormat::At2 => Self::from_at2_str(&text, origin),
+            RecordFormat::TwoColumn { units } => Self::from_two_column_str(&text, origin, units),
+            RecordFormat::OneColumn { dt, units } => {
+                Self::from_one_column_str(&text, origin, dt, units)
+            }
+        }?;
+        let mut m = memo();
+        if m.len() >= RECORDS_KEPT {
+            m.clear();
+        }
+        m.insert(key, g.clone());
+        Ok(g)
     }
 
     /// Parse a PEER AT2 record, in the units its header states on line 3 ([`at2_units`]).
