@@ -76,9 +76,10 @@ fmt:
 	$(CARGO) fmt --all
 
 # Clippy with warnings as errors (CI runs it); the lints allowed workspace-wide, with the
-# reason, are in Cargo.toml's [workspace.lints.clippy]. In its own target folder: on a clean
-# clone, cargo's cached compiler probe (target/.rustc_info.json) written during a clippy run
-# once held a failed probe of the plain compiler, and the next cargo test stopped on it.
+# reason, are in Cargo.toml's [workspace.lints.clippy]. In its own target folder, and in CI
+# after the tests: on a clean clone, a cargo test run right after clippy had its first
+# compiler probe (`rustc -`, cached in target/.rustc_info.json) read stray compiler output
+# as its source and stop (three times of four; deleting that file mends it).
 clippy:
 	$(CARGO) clippy --release --workspace --all-targets --target-dir target/clippy -- -D warnings
 
