@@ -89,13 +89,17 @@ pub enum RecordFormat {
 }
 
 /// Records parsed by [`GroundMotion::load`] in this process, by (file bytes, file name,
-/// format); forgotten all at once past [`RECORDS_KEPT`] (the 60 records of the studies take
-/// about 8 MB with their bytes).
+/// format), with the bytes they hold; forgotten all at once before they would pass
+/// [`RECORDS_BYTES`] (the 60 records of the studies hold about 8 MB).
 type RecordKey = (Vec<u8>, String, String);
-static RECORDS: std::sync::LazyLock<
-    std::sync::Mutex<std::collections::HashMap<RecordKey, GroundMotion>>,
-> = std::sync::LazyLock::new(Default::default);
-const RECORDS_KEPT: usize = 128;
+#[derive(Default)]
+struct RecordMemo {
+    records: std::collections::HashMap<RecordKey, GroundMotion>,
+    bytes: usize,
+}
+static RECORDS: std::sync::LazyLock<std::sync::Mutex<RecordMemo>> =
+    std::sync::LazyLock::new(Default::default);
+const RECORDS_BYTES: usize = 64 << 20;
 
 /// A uniformly sampled ground acceleration record.
 #[derive(Debug, Clone, PartialEq)]
@@ -481,7 +485,7 @@ impl GroundMotion {
         // themselves, so a changed file is read anew).
         let key = (bytes, origin, format!("{format:?}"));
         let memo = || RECORDS.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some(g) = memo().get(&key) {
+        if let Some(g) = memo().records.get(&key) {
             return Ok(g.clone());
         }
         let (bytes, origin, _) = &key;
@@ -493,11 +497,15 @@ impl GroundMotion {
                 Self::from_one_column_str(&text, origin, dt, units)
             }
         }?;
+        let size = key.0.len() + 8 * g.accel.len();
         let mut m = memo();
-        if m.len() >= RECORDS_KEPT {
-            m.clear();
+        if m.bytes + size > RECORDS_BYTES {
+            *m = RecordMemo::default();
         }
-        m.insert(key, g.clone());
+        if size <= RECORDS_BYTES {
+            m.bytes += size;
+            m.records.insert(key, g.clone());
+        }
         Ok(g)
     }
 
