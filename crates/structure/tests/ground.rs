@@ -314,8 +314,9 @@ fn error_load_names_file() {
 }
 
 /// Loaded records are remembered per process by (bytes, file name, format): the same file
-/// loads the same record; a file rewritten with other values, or read with another format,
-/// is parsed anew; a refused file is not remembered (fixed, it loads).
+/// loads the same record; a file rewritten with other values, read with another format, or
+/// a copy under another name (the record's name is the file's stem) is parsed anew; a file
+/// refused, then fixed, loads.
 #[test]
 fn remembered_records_follow_the_file_and_the_format() {
     let dir = std::env::temp_dir().join(format!("pound-record-memo-{}", std::process::id()));
@@ -331,6 +332,11 @@ fn remembered_records_follow_the_file_and_the_format() {
     assert_eq!(GroundMotion::load(&f, &one(0.01)).unwrap(), a);
     // Another format of the same bytes.
     assert_eq!(GroundMotion::load(&f, &one(0.02)).unwrap().dt, 0.02);
+    // The same bytes under another name.
+    let copy = dir.join("copy.txt");
+    std::fs::write(&copy, "0.1 0.2 0.3\n").unwrap();
+    let c = GroundMotion::load(&copy, &one(0.01)).unwrap();
+    assert_eq!((c.name.as_str(), &c.accel), ("copy", &a.accel));
     // The file rewritten.
     std::fs::write(&f, "0.1 0.2 0.4\n").unwrap();
     assert_eq!(

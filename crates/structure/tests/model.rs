@@ -132,6 +132,11 @@ fn remembered_calibrations_are_keyed_by_every_input() {
         again.building.damping,
         structure::model::Damping::Uniform(0.02)
     );
+    // A bad damping ratio is refused as a fresh calibration refuses it, remembered targets
+    // or not.
+    let remembered = calibrate_two_frequencies("c", 12, 1.3e6, 0.7, 2.4, 1.5).unwrap_err();
+    let fresh = calibrate_two_frequencies("c", 12, 1.35e6, 0.7, 2.4, 1.5).unwrap_err();
+    assert_eq!(remembered.to_string(), fresh.to_string());
     for (n, m, f1, f2) in [
         (13, 1.3e6, 0.7, 2.4),
         (12, 1.4e6, 0.7, 2.4),

@@ -358,6 +358,7 @@ fn scan<'a>(
     }
 }
 
+/// Parse one number (Fortran `D` exponents accepted).
 fn parse_number(text: &str) -> Option<f64> {
     if text.contains(['d', 'D']) {
         text.replace(['d', 'D'], "E").parse().ok()
