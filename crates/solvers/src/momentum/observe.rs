@@ -67,10 +67,8 @@ impl Stepper<'_> {
             let bm = &self.p.modal.buildings[b];
             let (nf, pf) = (bm.n_floors, bm.padded_floors());
             // The building's parts of the flat buffers (see `Stepper::u`, `Stepper::disp_max`).
-            let (ur, fr) = (
-                b * (self.fs + 1)..b * (self.fs + 1) + pf + 1,
-                b * self.fs..b * self.fs + pf,
-            );
+            let (o, f) = (self.floors_at(b), self.floor_at(b, 0));
+            let (ur, fr) = (o..o + pf + 1, f..f + pf);
             if len > 0.0 && !self.prev_valid[b] {
                 // The previous sample was skipped: the rates and values at the interval
                 // start, from its modal state.
@@ -253,11 +251,11 @@ impl Stepper<'_> {
     /// as [`sample`].
     #[inline]
     fn ends(&self, b: usize, i: usize, story: bool) -> (f64, f64, f64, f64) {
-        let o = b * (self.fs + 1);
+        let o = self.floors_at(b);
         let (u, ud) = (&self.u[o..], &self.ud[o..]);
         let (up, udp) = (&self.u_prev[o..], &self.ud_prev[o..]);
         if story {
-            let k = self.stiffness[b * self.fs + i];
+            let k = self.stiffness[self.floor_at(b, i)];
             (
                 k * (up[i + 1] - up[i]),
                 k * (udp[i + 1] - udp[i]),
@@ -277,7 +275,7 @@ impl Stepper<'_> {
         let mut w = self.flags[g].to_bits();
         let mut keep = w;
         // (Indexed in the flat buffers: only the set bits' quantities are read.)
-        let (o, f) = (b * (self.fs + 1), b * self.fs);
+        let (o, f) = (self.floors_at(b), self.floor_at(b, 0));
         let (u, ud, up, udp) = (&self.u, &self.ud, &self.u_prev, &self.ud_prev);
         let c = 4.0 / 27.0 * len;
         while w != 0 {
@@ -326,7 +324,7 @@ impl Stepper<'_> {
         stored: &mut Option<usize>,
     ) {
         let (y0, yd0, y1, yd1) = self.ends(b, i, story);
-        let f = b * self.fs + i;
+        let f = self.floor_at(b, i);
         let (exact, lower) = if story {
             (self.shear_max[f], self.shear_lower[f])
         } else {
@@ -422,7 +420,7 @@ impl Stepper<'_> {
         let op = &self.overlaps.pairs[k];
         let (l, i, r, j) = (op.left, op.left_dof, op.right, op.right_dof);
         // The flat buffers' indices (past the leading zero of each building's part).
-        let (i, j) = (l * (self.fs + 1) + i + 1, r * (self.fs + 1) + j + 1);
+        let (i, j) = (self.floors_at(l) + i + 1, self.floors_at(r) + j + 1);
         let y1 = u[i] - u[j];
         let (y0, yd0, yd1) = (up[i] - up[j], udp[i] - udp[j], ud[i] - ud[j]);
         let best = self.overlaps.max[k].max(self.overlap_lower[k]);
@@ -472,8 +470,8 @@ impl Stepper<'_> {
         let p = self.p;
         let modal = &p.modal;
         let best = |st: &Self, c: &Candidate| match c.target {
-            Target::Displacement { building, floor } => st.disp_max[building * st.fs + floor],
-            Target::Shear { building, story } => st.shear_max[building * st.fs + story],
+            Target::Displacement { building, floor } => st.disp_max[st.floor_at(building, floor)],
+            Target::Shear { building, story } => st.shear_max[st.floor_at(building, story)],
             Target::Overlap { pair } => st.overlaps.max[pair],
         };
         // Only candidates that can beat their peak now are ordered (peaks only grow, so the
@@ -531,10 +529,11 @@ impl Stepper<'_> {
                         iv.tau,
                     );
                     let y = peaks::refine(modal, first, coef, &a, iv.len, c.s0).abs();
+                    let f = self.floor_at(b, i);
                     let m = if story {
-                        &mut self.shear_max[b * self.fs + i]
+                        &mut self.shear_max[f]
                     } else {
-                        &mut self.disp_max[b * self.fs + i]
+                        &mut self.disp_max[f]
                     };
                     *m = m.max(y);
                 }
@@ -559,6 +558,7 @@ impl pulp::WithSimd for OverlapPass<'_, '_> {
     fn with_simd<S: pulp::Simd>(self, simd: S) -> (bool, bool) {
         let st = self.st;
         let (u, ud, udp) = (&st.u, &st.ud, &st.ud_prev);
+        // (`Stepper::floors_at` by hand: `st` is borrowed by field below.)
         let stride = st.fs + 1;
         let now = st.s.t;
         let ov = &mut st.overlaps;

@@ -553,9 +553,9 @@ impl<'a> Stepper<'a> {
             #[inline(always)]
             fn with_simd<S: pulp::Simd>(self, _: S) {
                 let st = self.st;
-                let o = st.fs + 1;
                 for (b, bm) in st.p.modal.buildings.iter().enumerate() {
-                    bm.to_floors(&st.s.v, &mut st.ud_prev[b * o + 1..(b + 1) * o]);
+                    let o = st.floors_at(b);
+                    bm.to_floors(&st.s.v, &mut st.ud_prev[o + 1..o + st.fs + 1]);
                 }
             }
         }
@@ -571,8 +571,9 @@ impl<'a> Stepper<'a> {
             .enumerate()
             .map(|(b, bd)| BuildingResponse {
                 name: bd.name.clone(),
-                story_shear_max: self.shear_max[b * self.fs..][..bd.n_floors()].to_vec(),
-                floor_displacement_max: self.disp_max[b * self.fs..][..bd.n_floors()].to_vec(),
+                story_shear_max: self.shear_max[self.floor_at(b, 0)..][..bd.n_floors()].to_vec(),
+                floor_displacement_max: self.disp_max[self.floor_at(b, 0)..][..bd.n_floors()]
+                    .to_vec(),
                 ..Default::default()
             })
             .collect()
@@ -1122,6 +1123,20 @@ impl<'a> Stepper<'a> {
         self.interval.tau_done = s_end;
         self.observe();
         Ok(step)
+    }
+
+    /// Where building `b`'s part of `u`, `ud`, `u_prev` and `ud_prev` begins: its leading zero
+    /// (the ground), floor i at `floors_at(b) + i + 1`.
+    #[inline(always)]
+    pub(super) fn floors_at(&self, b: usize) -> usize {
+        b * (self.fs + 1)
+    }
+
+    /// Floor (story) `i` of building `b` in the per-floor buffers (`disp_max`, `shear_max`,
+    /// their lower bounds, `stiffness`).
+    #[inline(always)]
+    pub(super) fn floor_at(&self, b: usize, i: usize) -> usize {
+        b * self.fs + i
     }
 
     /// Closes open phases and returns the final modal energy.
