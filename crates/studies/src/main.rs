@@ -3,8 +3,11 @@
 //! Exit codes: 0 success; 2 bad input (scene, record, arguments); 3 a solver could not go on;
 //! 4 a study sweep finished but some of its cases failed (each study's `summary.md` names
 //! them; tables and figures are written from the cases that finished); 1 anything else (for
-//! example an output file that cannot be written).
+//! example an output file that cannot be written, or stdout). Stdout closed by its reader (a
+//! broken pipe, as in `pound export opensees SCENE | head`) ends the program quietly with
+//! [`BROKEN_PIPE_STATUS`].
 
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -15,6 +18,15 @@ use solvers::{History, Method};
 use structure::ground::spectrum::{default_periods, response_spectrum};
 use structure::{GroundMotion, RecordFormat, Scene, Units};
 use studies::{io, report};
+
+/// Every message on stderr goes through this `eprintln!`, which shadows std's: std's panics when
+/// stderr cannot be written (a closed or full stderr), this one drops the message, since there
+/// is nowhere left to report the failure; the exit code still tells.
+macro_rules! eprintln {
+    ($($arg:tt)*) => {{
+        let _ = writeln!(std::io::stderr(), $($arg)*);
+    }};
+}
 
 #[derive(Parser)]
 #[command(
@@ -294,6 +306,29 @@ fn gap_law_notes(scene: &structure::Scene) -> Vec<String> {
     notes
 }
 
+/// A write to stdout that failed (exit code 1, or [`BROKEN_PIPE_STATUS`] quietly when the
+/// reader has gone). Not a `#[source]`: the message holds the reason once.
+#[derive(Debug, thiserror::Error)]
+#[error("cannot write to stdout: {0}")]
+struct StdoutError(std::io::Error);
+
+/// Exit status when stdout's reader has closed the pipe (`pound … | head`): 141 = 128 + SIGPIPE
+/// (13), the status a shell reports for a C tool such as `cat` or `grep` killed by SIGPIPE,
+/// printed without a message. Not 0: the output was cut short, and under `set -o pipefail` a
+/// reader that stopped early (or crashed) must not read as a complete output; not 1: nothing
+/// is wrong with pound or its input, and scripts already treat 141 as "the reader stopped", as
+/// they do for `yes | head`.
+const BROKEN_PIPE_STATUS: u8 = 141;
+
+/// The one place the program writes to stdout: the whole text to a locked stdout, flushed, so
+/// a failure is an error (std's `print!` panics on one).
+fn print_out(text: &str) -> Result<(), StdoutError> {
+    let mut out = std::io::stdout().lock();
+    out.write_all(text.as_bytes())
+        .and_then(|()| out.flush())
+        .map_err(StdoutError)
+}
+
 fn input<E: std::fmt::Display>(e: E) -> anyhow::Error {
     anyhow::Error::new(InputError(e.to_string()))
 }
@@ -411,30 +446,36 @@ fn load_scene(path: &Path, set: &[String]) -> Result<Scene> {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Modes { scene, set, json } => {
+        Command::Modes {
+            scene: path,
+            set,
+            json,
+        } => {
             // The structure alone: a scene without a record or a duration is fine here.
             let scene =
-                Scene::from_file_for(&scene, &set, structure::Purpose::Structure).map_err(input)?;
-            if json {
-                println!(
-                    "{}",
-                    serde_json::to_string_pretty(&report::modes_json(&scene).map_err(input)?)?
-                );
+                Scene::from_file_for(&path, &set, structure::Purpose::Structure).map_err(input)?;
+            // A building the eigen-solver cannot take is named with its scene file.
+            let in_scene = |e: structure::ModelError| input(format!("{}: {e}", path.display()));
+            let text = if json {
+                let doc = report::modes_json(&scene).map_err(in_scene)?;
+                format!("{}\n", serde_json::to_string_pretty(&doc)?)
             } else {
-                print!("{}", report::modes_table(&scene).map_err(input)?);
-            }
+                report::modes_table(&scene).map_err(in_scene)?
+            };
+            print_out(&text)?;
         }
         Command::Record { record, json } => {
             let gm = load_record(&record)?;
             implausible_pga(&gm, "--units");
-            if json {
-                println!(
-                    "{}",
+            let text = if json {
+                format!(
+                    "{}\n",
                     serde_json::to_string_pretty(&report::record_json(&gm))?
-                );
+                )
             } else {
-                print!("{}", report::record_table(&gm));
-            }
+                report::record_table(&gm)
+            };
+            print_out(&text)?;
         }
         Command::Spectrum {
             record,
@@ -505,7 +546,7 @@ fn run(cli: Cli) -> Result<()> {
             }
             match out {
                 Some(path) => io::write_atomic(&path, csv.as_bytes())?,
-                None => print!("{csv}"),
+                None => print_out(&csv)?,
             }
         }
         Command::Run {
@@ -607,25 +648,32 @@ fn run(cli: Cli) -> Result<()> {
                 eprintln!("wrote {}", names.join(", "));
             }
             if let Some(s) = stdout_json {
-                print!("{s}");
+                print_out(&s)?;
             } else if out.is_none() {
-                print!(
-                    "{}",
-                    report::run_summary(&scene, &result, amplification.as_deref())
-                );
+                print_out(&report::run_summary(
+                    &scene,
+                    &result,
+                    amplification.as_deref(),
+                ))?;
             }
         }
         Command::Export {
-            target: ExportTarget::Opensees { scene, set, out },
+            target:
+                ExportTarget::Opensees {
+                    scene: path,
+                    set,
+                    out,
+                },
         } => {
-            let scene = load_scene(&scene, &set)?;
-            let script = studies::export::opensees_script(&scene).map_err(input)?;
+            let scene = load_scene(&path, &set)?;
+            let script = studies::export::opensees_script(&scene)
+                .map_err(|e| input(format!("{}: {e}", path.display())))?;
             for w in studies::export::opensees_caveats(&scene) {
                 eprintln!("warning: {w}");
             }
             match out {
                 Some(p) => io::write_atomic(&p, script.as_bytes())?,
-                None => print!("{script}"),
+                None => print_out(&script)?,
             }
         }
         Command::Studies { command } => studies_command(command)?,
@@ -890,10 +938,25 @@ fn failed_cases(unexpected: &[String]) -> Result<()> {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            // `--help` and `--version` print on stdout, argument errors on stderr: a failed
+            // help is a failed stdout write like any other.
+            if let Err(io) = e.print() {
+                if !e.use_stderr() {
+                    return stdout_failed(&StdoutError(io));
+                }
+            }
+            return ExitCode::from(u8::try_from(e.exit_code()).unwrap_or(2));
+        }
+    };
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
+            if let Some(s) = e.chain().find_map(|c| c.downcast_ref::<StdoutError>()) {
+                return stdout_failed(s);
+            }
             eprintln!("error: {e:#}");
             let refused = e.chain().any(|c| {
                 matches!(
@@ -914,5 +977,17 @@ fn main() -> ExitCode {
                 ExitCode::from(1)
             }
         }
+    }
+}
+
+/// The exit of a failed stdout write: quiet with [`BROKEN_PIPE_STATUS`] when the reader has
+/// closed the pipe (the reader wanted no more, or is gone: nothing left to tell), else the
+/// error and 1.
+fn stdout_failed(e: &StdoutError) -> ExitCode {
+    if e.0.kind() == std::io::ErrorKind::BrokenPipe {
+        ExitCode::from(BROKEN_PIPE_STATUS)
+    } else {
+        eprintln!("error: {e}");
+        ExitCode::from(1)
     }
 }
