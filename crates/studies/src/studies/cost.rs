@@ -18,7 +18,11 @@ use serde::Deserialize;
 use solvers::Method;
 
 use super::stats::percentile;
-use super::{default_pga, failures_note, record_label, shear_error, write_summary, Ctx, Study};
+use super::{
+    default_pga, failures_note, is_gap, is_positive, record_label, require, require_count,
+    require_list, require_mode_counts, require_pga, shear_error, write_summary, Ctx, Study,
+    MAX_REPEAT,
+};
 use crate::plot::{figure, Marker, Panel, PanelKind, Series, VLine};
 use crate::sweep::{CaseOutputs, CaseResult, CaseSpec, Result, Results};
 use crate::table::{e, Table};
@@ -28,27 +32,68 @@ pub struct Cost;
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct Def {
+    /// Scene of the pair (relative to `studies/`); contact 0 joins the two buildings.
     scene: String,
+    /// Analysis PGA, g: finite, > 0 (default 0.40).
     #[serde(default = "default_pga")]
     pga: f64,
+    /// The record (relative to `studies/`).
     record: String,
-    /// Gap of contact 0, m.
+    /// Gap of contact 0, m: finite, >= 0.
     gap: f64,
-    /// Modes kept per building by the truncated momentum runs.
+    /// Modes kept per building by the truncated momentum runs: at least one, each in
+    /// 1 ..= [`super::MAX_MODES`] (1000).
     modes: Vec<usize>,
-    /// Gap-element stiffness of the adaptive runs, N/m.
+    /// Gap-element stiffness of the adaptive runs, N/m: at least one, each > 0 (checked by
+    /// the scene in every case).
     adaptive_stiffness: Vec<f64>,
+    /// Local error tolerances of the adaptive runs: at least one, each in (0, 0.1) (checked
+    /// by the scene).
     adaptive_tolerance: Vec<f64>,
-    /// Newmark time steps, s.
+    /// Newmark time steps, s: at least one, each > 0 and at most the record's step (checked
+    /// by the scene).
     newmark_step: Vec<f64>,
-    /// Gap-element stiffness of the Newmark runs, N/m.
+    /// Gap-element stiffness of the Newmark runs, N/m: at least one, each > 0 (checked by
+    /// the scene).
     newmark_stiffness: Vec<f64>,
-    /// Tolerance of the converged gap-element answer at each k (default 1e-12).
+    /// Tolerance of the converged gap-element answer at each k (default 1e-12; in (0, 0.1),
+    /// checked by the scene).
     #[serde(default = "default_reference_tolerance")]
     reference_tolerance: f64,
+    /// Runs of each timed case (fastest, median and slowest reported): 1 ..= [`MAX_REPEAT`]
+    /// (1000).
     repeat: u32,
-    /// Accuracy levels at which the speed ratio is reported.
+    /// Accuracy levels (relative story-shear errors, 0.05 = 5 %) at which the speed ratio is
+    /// reported: at least one, each finite and > 0.
     accuracy: Vec<f64>,
+}
+
+/// The definition's values the scene does not check in every case: bad input (exit 2)
+/// before any case is built.
+fn validate(ctx: &Ctx, d: &Def) -> Result<()> {
+    require_pga(ctx, d.pga)?;
+    require(ctx, is_gap(d.gap), || {
+        format!("`gap` = {:?}: expected a finite gap >= 0 (m)", d.gap)
+    })?;
+    require_mode_counts(ctx, "modes", &d.modes, false)?;
+    for (key, v) in [
+        ("adaptive_stiffness", &d.adaptive_stiffness),
+        ("adaptive_tolerance", &d.adaptive_tolerance),
+        ("newmark_step", &d.newmark_step),
+        ("newmark_stiffness", &d.newmark_stiffness),
+    ] {
+        require(ctx, !v.is_empty(), || {
+            format!("`{key}` = []: expected at least one value")
+        })?;
+    }
+    require_count(ctx, "repeat", d.repeat, 1..=MAX_REPEAT, "run")?;
+    require_list(
+        ctx,
+        "accuracy",
+        &d.accuracy,
+        is_positive,
+        "a finite relative error > 0 (0.05 = 5 %)",
+    )
 }
 
 fn default_reference_tolerance() -> f64 {
@@ -191,6 +236,7 @@ struct Measured {
 impl Study for Cost {
     fn cases(&self, ctx: &Ctx) -> Result<Vec<CaseSpec>> {
         let mut d: Def = ctx.def()?;
+        validate(ctx, &d)?;
         shrink(ctx, &mut d);
         let mut v = vec![reference(ctx, &d)];
         v.extend(

@@ -18,7 +18,8 @@ use super::record_table::PulseClass;
 use super::stats::{median_band, Spread};
 use super::{
     amp_contact, contact_floor_displacement, default_pga, default_record_table, failures_note,
-    record_classes, record_name, study_records, write_summary, Ctx, Study,
+    record_classes, record_name, require_count, require_pga, study_records, write_summary, Ctx,
+    Study, MAX_GRID,
 };
 use crate::plot::{figure, Marker, Panel, PanelKind, Series};
 use crate::sweep::{CaseSpec, Result, Results, StudyError};
@@ -29,21 +30,28 @@ pub struct Gap;
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct Def {
+    /// Scene of the pair (relative to `studies/`); contact 0 joins the two buildings.
     scene: String,
+    /// Analysis PGA, g: finite, > 0 (default 0.40).
     #[serde(default = "default_pga")]
     pga: f64,
     /// Record files (relative to `studies/`); default: the four Loma Prieta components
-    /// when `record_dirs` is not given either.
+    /// when `record_dirs` is not given either. With `record_dirs`, at least one record in all.
     records: Option<Vec<String>>,
-    /// Folders whose every `*.AT2` is added (sorted by file name).
+    /// Folders whose every `*.AT2` is added (sorted by file name); default none.
     #[serde(default)]
     record_dirs: Vec<String>,
-    /// Record metadata (pulse classes), relative to `studies/`.
+    /// Record metadata (pulse classes), relative to `studies/` (default
+    /// `../data/ground-motions/records.csv`).
     #[serde(default = "default_record_table")]
     record_table: String,
+    /// Largest gap of the grid, m: finite, > 0 (the grid runs from 0 to it).
     gap_max: f64,
+    /// Gaps in the grid (evenly spaced, 0 … `gap_max`): 2 ..= [`MAX_GRID`] (1000).
     gap_count: usize,
+    /// Linear gap-element stiffness, N/m: > 0 (checked by the scene in every case).
     gap_stiffness: f64,
+    /// Damping ratio of the CQC correlation of the DDC rule: 0 <= ζ < 1.
     damping: f64,
 }
 
@@ -90,9 +98,8 @@ pub fn cqc_rho(zeta: f64, r: f64) -> f64 {
 impl Study for Gap {
     fn cases(&self, ctx: &Ctx) -> Result<Vec<CaseSpec>> {
         let d: Def = ctx.def()?;
-        super::require(ctx, d.gap_count >= 2, || {
-            format!("`gap_count` = {}: expected at least 2 gaps", d.gap_count)
-        })?;
+        require_pga(ctx, d.pga)?;
+        require_count(ctx, "gap_count", d.gap_count, 2..=MAX_GRID, "gaps")?;
         super::require(ctx, d.gap_max.is_finite() && d.gap_max > 0.0, || {
             format!("`gap_max` = {:?}: expected a gap > 0 (m)", d.gap_max)
         })?;

@@ -149,6 +149,92 @@ pub fn require(ctx: &Ctx, ok: bool, message: impl FnOnce() -> String) -> Result<
     }
 }
 
+/// Most modes a study definition may name (`max_modes`, `fewer_modes`, `modes`,
+/// `paper_impulse_modes`): as many as the floors of the largest `stories = N` building the
+/// scene accepts ([`structure::scene::MAX_STORIES`]); a count above a building's floors keeps
+/// all its modes.
+pub const MAX_MODES: usize = structure::scene::MAX_STORIES;
+
+/// Most points of a generated grid (`gap_count`, `stiffness_count`,
+/// `adaptive_stiffness_count`): a guard against absurd case lists (a count of 10⁹ used to
+/// abort on an allocation of gigabytes).
+pub const MAX_GRID: usize = 1_000;
+
+/// Most runs of a timed case (the cost study's `repeat`).
+pub const MAX_REPEAT: u32 = 1_000;
+
+/// A whole-number definition value outside `range`: `Err` naming the key, its value and the
+/// allowed range (`what` says what is counted).
+pub fn require_count<T>(
+    ctx: &Ctx,
+    key: &str,
+    value: T,
+    range: std::ops::RangeInclusive<T>,
+    what: &str,
+) -> Result<()>
+where
+    T: PartialOrd + std::fmt::Display + Copy,
+{
+    require(ctx, range.contains(&value), || {
+        format!(
+            "`{key}` = {value}: expected at least {} {what} and at most {} ({} ..= {})",
+            range.start(),
+            range.end(),
+            range.start(),
+            range.end()
+        )
+    })
+}
+
+/// A list of mode counts (`key`), each in 1 ..= [`MAX_MODES`]; at least one unless
+/// `may_be_empty`.
+pub fn require_mode_counts(ctx: &Ctx, key: &str, v: &[usize], may_be_empty: bool) -> Result<()> {
+    let ok = (may_be_empty || !v.is_empty()) && v.iter().all(|n| (1..=MAX_MODES).contains(n));
+    require(ctx, ok, || {
+        format!(
+            "`{key}` = {v:?}: expected {} mode count{}, each in 1 ..= {MAX_MODES}",
+            if may_be_empty { "" } else { "at least one" },
+            if may_be_empty { "s" } else { "" }
+        )
+    })
+}
+
+/// A list of `key` values: at least one, each `ok` (`expected` says what is expected of
+/// each, e.g. "a gap >= 0 (m)").
+pub fn require_list(
+    ctx: &Ctx,
+    key: &str,
+    v: &[f64],
+    ok: impl Fn(f64) -> bool,
+    expected: &str,
+) -> Result<()> {
+    require(ctx, !v.is_empty() && v.iter().all(|&x| ok(x)), || {
+        format!("`{key}` = {v:?}: expected at least one value, each {expected}")
+    })
+}
+
+/// A finite length >= 0 (a gap, m).
+pub fn is_gap(x: f64) -> bool {
+    x.is_finite() && x >= 0.0
+}
+
+/// A coefficient of restitution, in [0, 1].
+pub fn is_restitution(x: f64) -> bool {
+    (0.0..=1.0).contains(&x)
+}
+
+/// A finite number > 0.
+pub fn is_positive(x: f64) -> bool {
+    x.is_finite() && x > 0.0
+}
+
+/// The analysis PGA `pga` (g, key `pga`) of a study: finite and > 0.
+pub fn require_pga(ctx: &Ctx, pga: f64) -> Result<()> {
+    require(ctx, is_positive(pga), || {
+        format!("`pga` = {pga:?}: expected a finite peak ground acceleration > 0 (g)")
+    })
+}
+
 /// Short label of a record file: its stem without the PEER `RSN…_…_` prefix.
 pub fn record_label(path: &str) -> String {
     let stem = Path::new(path)
@@ -421,9 +507,13 @@ fn case_refused(ctx: &Ctx, c: &CaseSpec, e: structure::SceneError) -> StudyError
 
 fn read_definition(cfg: &RunConfig, name: &str) -> Result<(String, String)> {
     let path = cfg.studies_dir.join(format!("{name}.toml"));
-    let text = std::fs::read_to_string(&path).map_err(|e| StudyError::Read {
-        path: path.display().to_string(),
-        message: e.to_string(),
+    // A definition that cannot be read (missing, not UTF-8, a folder) is bad input (exit 2),
+    // as an unreadable scene is.
+    let text = std::fs::read_to_string(&path).map_err(|e| StudyError::Definition {
+        file: path.display().to_string(),
+        message: format!(
+            "cannot read the study definition ({e}); expected a UTF-8 TOML file `{name}.toml` in the studies folder"
+        ),
     })?;
     Ok((text, path.display().to_string()))
 }
@@ -945,6 +1035,12 @@ pub fn study_records(
     }
     let mut seen = std::collections::BTreeSet::new();
     out.retain(|r| seen.insert(r.clone()));
+    require(ctx, !out.is_empty(), || {
+        format!(
+            "`records` = {:?}, `record_dirs` = {record_dirs:?}: no record; expected at least one record (a file in `records` or a *.AT2 file in a folder of `record_dirs`)",
+            records.unwrap_or_default()
+        )
+    })?;
     Ok(ctx.records(&out, false))
 }
 

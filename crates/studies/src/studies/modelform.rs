@@ -27,8 +27,9 @@ use structure::{Contact, Scene};
 
 use super::stats::median;
 use super::{
-    amplification, default_pga, default_records, failures_note, record_label, write_summary, Ctx,
-    Study,
+    amplification, default_pga, default_records, failures_note, is_gap, is_positive,
+    is_restitution, record_label, require_count, require_list, require_pga, write_summary, Ctx,
+    Study, MAX_MODES,
 };
 use crate::plot::{figure, Marker, Panel, PanelKind, Series, VLine};
 use crate::sweep::{CaseSpec, Result, Results, StudyError};
@@ -47,14 +48,18 @@ enum Contacts {
     EveryFloor,
 }
 
+/// A model variant (`[[variants]]`).
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct Variant {
+    /// Name in the tables.
     name: String,
+    /// What the variant changes (the tables' description column).
     description: String,
-    /// Scene overrides (`PATH=VALUE`).
+    /// Scene overrides (`PATH=VALUE`); default none.
     #[serde(default)]
     set: Vec<String>,
+    /// Where the buildings may touch: `"scene"` (default) or `"every-floor"`.
     #[serde(default)]
     contacts: Contacts,
 }
@@ -62,23 +67,34 @@ struct Variant {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct Def {
+    /// Scene of the pair (relative to `studies/`): two buildings.
     scene: String,
+    /// Analysis PGA, g: finite, > 0 (default 0.40).
     #[serde(default = "default_pga")]
     pga: f64,
+    /// Record files (relative to `studies/`): at least one (default: the four Loma Prieta
+    /// components).
     #[serde(default = "default_records")]
     records: Vec<String>,
-    /// m.
+    /// Gaps of contact 0, m: at least one, each finite and >= 0.
     gaps: Vec<f64>,
+    /// Coefficients of restitution: at least one, each in [0, 1], one of them 1.0.
     restitution: Vec<f64>,
-    /// N/m.
+    /// Gap-element stiffness beside every momentum run, N/m: > 0 (checked by the scene).
     check_stiffness: f64,
-    /// N/m.
+    /// Typical gap-element stiffness of conclusion (c), N/m: > 0 (checked by the scene).
     soft_stiffness: f64,
+    /// Modes of the truncated momentum run, conclusion (d): 1 ..= [`super::MAX_MODES`] (1000).
     fewer_modes: usize,
+    /// Local error tolerance of the adaptive gap element: in (0, 0.1) (checked by the scene).
     tolerance: f64,
+    /// Conclusion (a): the top story is amplified by more than this: finite, > 0.
     amplification_threshold: f64,
+    /// Conclusion (b): stories below mid-height within 1 ± this: finite, > 0.
     local_band: f64,
+    /// Conclusion (c): relative difference of the soft answer from the rigid one: finite, > 0.
     gap_element_band: f64,
+    /// The model variants: at least one.
     variants: Vec<Variant>,
 }
 
@@ -240,11 +256,31 @@ fn validate(ctx: &Ctx, d: &Def, scene: &Scene) -> Result<()> {
     if d.variants.is_empty() || d.gaps.is_empty() || d.restitution.is_empty() {
         return bad("`variants`, `gaps` and `restitution` must not be empty".into());
     }
+    // `--records` replace the definition's, so an empty `records` is refused only when used.
+    super::require(ctx, !ctx.records(&d.records, true).is_empty(), || {
+        "`records` = []: expected at least one record".into()
+    })?;
+    require_pga(ctx, d.pga)?;
+    require_list(ctx, "gaps", &d.gaps, is_gap, "a finite gap >= 0 (m)")?;
+    require_list(
+        ctx,
+        "restitution",
+        &d.restitution,
+        is_restitution,
+        "a coefficient of restitution in [0, 1]",
+    )?;
     if !d.restitution.contains(&1.0) {
         return bad("`restitution` must contain 1.0 (the conclusions use c_r = 1)".into());
     }
-    if d.fewer_modes < 1 {
-        return bad("`fewer_modes` must be >= 1".into());
+    require_count(ctx, "fewer_modes", d.fewer_modes, 1..=MAX_MODES, "mode")?;
+    for (key, v) in [
+        ("amplification_threshold", d.amplification_threshold),
+        ("local_band", d.local_band),
+        ("gap_element_band", d.gap_element_band),
+    ] {
+        super::require(ctx, is_positive(v), || {
+            format!("`{key}` = {v:?}: expected a finite number > 0")
+        })?;
     }
     for v in &d.variants {
         if let Some(s) = v.set.iter().find(|s| !s.contains('=')) {

@@ -11,8 +11,9 @@ use solvers::Method;
 use super::record_table::PulseClass;
 use super::stats::{median_band, Spread};
 use super::{
-    amp_contact, default_pga, default_record_table, failures_note, record_classes, record_name,
-    study_records, write_summary, Ctx, Study,
+    amp_contact, default_pga, default_record_table, failures_note, is_gap, is_restitution,
+    record_classes, record_name, require_count, require_pga, study_records, write_summary, Ctx,
+    Study, MAX_MODES,
 };
 use crate::plot::{figure, Marker, Panel, PanelKind, Series};
 use crate::sweep::{CaseSpec, Result, Results};
@@ -23,23 +24,35 @@ pub struct Modes;
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct Def {
+    /// Scene of the pair (relative to `studies/`); contact 0 joins the two buildings.
     scene: String,
+    /// Analysis PGA, g: finite, > 0 (default 0.40).
     #[serde(default = "default_pga")]
     pga: f64,
     /// Record files (relative to `studies/`); default: the four Loma Prieta components
-    /// when `record_dirs` is not given either.
+    /// when `record_dirs` is not given either. With `record_dirs`, at least one record in all.
     records: Option<Vec<String>>,
-    /// Folders whose every `*.AT2` is added (sorted by file name).
+    /// Folders whose every `*.AT2` is added (sorted by file name); default none.
     #[serde(default)]
     record_dirs: Vec<String>,
-    /// Record metadata (pulse classes), relative to `studies/`.
+    /// Record metadata (pulse classes), relative to `studies/` (default
+    /// `../data/ground-motions/records.csv`).
     #[serde(default = "default_record_table")]
     record_table: String,
+    /// Gap of contact 0, m: finite, >= 0.
     gap: f64,
+    /// Coefficient of restitution of contact 0: in [0, 1].
     restitution: f64,
+    /// Modes kept per building run 1 … this: 5 ..= [`MAX_MODES`] (1000; a count above a
+    /// building's floors keeps all its modes).
     max_modes: usize,
+    /// Impulse variants of the momentum method (`"consistent"`, `"paper"`): at least one,
+    /// each once.
     variants: Vec<String>,
 }
+
+/// The impulse variants (`momentum.impulse`) the study may compare.
+const VARIANTS: [&str; 2] = ["consistent", "paper"];
 
 fn case(ctx: &Ctx, d: &Def, rec: &str, variant: &str, n: usize) -> CaseSpec {
     ctx.case(&d.scene, Method::Momentum, rec, d.pga)
@@ -62,10 +75,28 @@ fn modes(ctx: &Ctx, d: &Def) -> Vec<usize> {
 impl Study for Modes {
     fn cases(&self, ctx: &Ctx) -> Result<Vec<CaseSpec>> {
         let d: Def = ctx.def()?;
-        super::require(ctx, d.max_modes >= 5, || {
+        require_pga(ctx, d.pga)?;
+        super::require(ctx, is_gap(d.gap), || {
+            format!("`gap` = {:?}: expected a finite gap >= 0 (m)", d.gap)
+        })?;
+        super::require(ctx, is_restitution(d.restitution), || {
             format!(
-                "`max_modes` = {}: expected at least 5 (the study compares 1, 5, … modes)",
-                d.max_modes
+                "`restitution` = {:?}: expected a coefficient of restitution in [0, 1]",
+                d.restitution
+            )
+        })?;
+        // (The study compares 1, 5, … modes.)
+        require_count(ctx, "max_modes", d.max_modes, 5..=MAX_MODES, "modes")?;
+        let known = d.variants.iter().all(|v| VARIANTS.contains(&v.as_str()));
+        let once = d
+            .variants
+            .iter()
+            .enumerate()
+            .all(|(i, v)| !d.variants[..i].contains(v));
+        super::require(ctx, !d.variants.is_empty() && known && once, || {
+            format!(
+                "`variants` = {:?}: expected at least one impulse variant, each once, of {VARIANTS:?}",
+                d.variants
             )
         })?;
         let mut v = Vec::new();

@@ -10,43 +10,128 @@ use solvers::Method;
 use structure::ground::spectrum::{default_periods, response_spectrum};
 use structure::{GroundMotion, RecordFormat};
 
-use super::{amplification, default_pga, record_label, write_summary, Ctx, Study};
+use super::{
+    amplification, default_pga, is_gap, is_positive, record_label, require, require_count,
+    require_list, require_mode_counts, require_pga, write_summary, Ctx, Study, MAX_MODES,
+};
 use crate::plot::{figure, Marker, Panel, PanelKind, Series, VLine};
 use crate::sweep::{CaseSpec, Result, Results, StudyError};
 use crate::table::{f, Table};
 
 pub struct Paper;
 
+/// The paper's Table 2 at one gap (`[[reference]]`).
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct Reference {
+    /// Gap, m: one of the definition's `gaps`, each at most once over the references.
     gap: f64,
-    /// Floor 15 first, as printed.
+    /// Amplification factors of building 1, X component, top floor first, as printed: one
+    /// per floor of the building (15 in the paper), each finite and > 0.
     building1_x: Vec<f64>,
+    /// Building 1, Y component (as `building1_x`).
     building1_y: Vec<f64>,
+    /// Building 2, X component (one per floor of building 2).
     building2_x: Vec<f64>,
+    /// Building 2, Y component.
     building2_y: Vec<f64>,
 }
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct Def {
-    /// The main model: contact at every facing floor pair.
+    /// The main model: contact at every facing floor pair (relative to `studies/`).
     scene: String,
     /// The paper's model: contact at the roofs only.
     roof_only_scene: String,
+    /// Analysis PGA of both components, g: finite, > 0 (default 0.40).
     #[serde(default = "default_pga")]
     pga: f64,
+    /// The X component (relative to `studies/`).
     record_x: String,
+    /// The Y component.
     record_y: String,
+    /// Gaps of contact 0, m: at least one, each finite and >= 0.
     gaps: Vec<f64>,
-    /// Mode counts for extra momentum columns (consistent impulse).
+    /// Mode counts for extra momentum columns (consistent impulse): each in
+    /// 1 ..= [`super::MAX_MODES`] (1000); may be empty (no extra columns).
     fewer_modes: Vec<usize>,
-    /// Mode count for the paper's own impulse (eqs 23–24 projected on the kept modes).
+    /// Mode count for the paper's own impulse (eqs 23–24 projected on the kept modes):
+    /// 1 ..= 1000.
     paper_impulse_modes: usize,
+    /// Linear gap-element stiffness, N/m: > 0 (checked by the scene in every case).
     gap_stiffness: f64,
+    /// Damping ratio of Figure 1's spectra: 0 <= ζ < 1.
     spectrum_damping: f64,
+    /// The paper's Table 2 (may be empty: no paper columns).
     reference: Vec<Reference>,
+}
+
+/// The definition's values the scene does not check in every case (the reference lists
+/// against the scene's floors): bad input (exit 2) before any case is built.
+fn validate(ctx: &Ctx, d: &Def) -> Result<()> {
+    require_pga(ctx, d.pga)?;
+    require_list(ctx, "gaps", &d.gaps, is_gap, "a finite gap >= 0 (m)")?;
+    require_mode_counts(ctx, "fewer_modes", &d.fewer_modes, true)?;
+    require_count(
+        ctx,
+        "paper_impulse_modes",
+        d.paper_impulse_modes,
+        1..=MAX_MODES,
+        "mode",
+    )?;
+    require(ctx, (0.0..1.0).contains(&d.spectrum_damping), || {
+        format!(
+            "`spectrum_damping` = {:?}: expected a damping ratio 0 <= ζ < 1 (Figure 1's spectrum)",
+            d.spectrum_damping
+        )
+    })?;
+    if d.reference.is_empty() {
+        return Ok(());
+    }
+    let scene = CaseSpec::new(&d.scene, Method::Momentum)
+        .load_scene(&ctx.studies_dir)
+        .map_err(|message| StudyError::Definition {
+            file: ctx.def_file.clone(),
+            message,
+        })?;
+    let floors: Vec<usize> = scene.buildings.iter().map(|b| b.n_floors()).collect();
+    for (i, r) in d.reference.iter().enumerate() {
+        require(ctx, d.gaps.contains(&r.gap), || {
+            format!(
+                "`reference[{i}].gap` = {:?}: expected one of `gaps` = {:?} (m)",
+                r.gap, d.gaps
+            )
+        })?;
+        require(ctx, d.reference[..i].iter().all(|o| o.gap != r.gap), || {
+            format!(
+                "`reference[{i}].gap` = {:?}: a second reference at this gap; expected one per gap",
+                r.gap
+            )
+        })?;
+        for (key, b, v) in [
+            ("building1_x", 0, &r.building1_x),
+            ("building1_y", 0, &r.building1_y),
+            ("building2_x", 1, &r.building2_x),
+            ("building2_y", 1, &r.building2_y),
+        ] {
+            let n = floors.get(b).copied().unwrap_or(0);
+            require(ctx, v.len() == n, || {
+                format!(
+                    "`reference[{i}].{key}` has {} values: expected {n} values (one per floor of building {} of `{}`, top floor first)",
+                    v.len(),
+                    b + 1,
+                    d.scene
+                )
+            })?;
+            require(ctx, v.iter().all(|&x| is_positive(x)), || {
+                format!(
+                    "`reference[{i}].{key}` = {v:?}: expected amplification factors, each finite and > 0"
+                )
+            })?;
+        }
+    }
+    Ok(())
 }
 
 #[derive(Clone, Copy, PartialEq)]
@@ -130,12 +215,7 @@ fn history_case(ctx: &Ctx, d: &Def, v: Variant) -> CaseSpec {
 impl Study for Paper {
     fn cases(&self, ctx: &Ctx) -> Result<Vec<CaseSpec>> {
         let d: Def = ctx.def()?;
-        super::require(ctx, (0.0..1.0).contains(&d.spectrum_damping), || {
-            format!(
-                "`spectrum_damping` = {:?}: expected a damping ratio 0 <= ζ < 1 (Figure 1's spectrum)",
-                d.spectrum_damping
-            )
-        })?;
+        validate(ctx, &d)?;
         let mut v = Vec::new();
         for &gap in &d.gaps {
             for var in x_variants(&d) {
@@ -263,7 +343,6 @@ impl Study for Paper {
         )?;
 
         // Table 2.
-        let floors = scene.buildings[0].n_floors();
         let names: Vec<String> = scene.buildings.iter().map(|b| b.name.clone()).collect();
         let xv = x_variants(&d);
         let mut tables = Vec::new();
@@ -292,6 +371,8 @@ impl Study for Paper {
                 &header_refs,
             );
             for b in 0..names.len() {
+                // Each building's own floors (the reference lists hold one value per floor).
+                let floors = scene.buildings[b].n_floors();
                 let pick = |a: &Option<Vec<Vec<f64>>>, j: usize| {
                     a.as_ref()
                         .and_then(|a| a.get(b).and_then(|v| v.get(j).copied()))

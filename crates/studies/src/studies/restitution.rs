@@ -10,8 +10,8 @@ use solvers::Method;
 
 use super::stats::{median_band, Spread};
 use super::{
-    amp_contact, default_pga, default_record_table, failures_note, record_classes, study_records,
-    write_summary, Ctx, Study,
+    amp_contact, default_pga, default_record_table, failures_note, is_gap, record_classes,
+    require_pga, study_records, write_summary, Ctx, Study,
 };
 use crate::plot::{figure, Panel, PanelKind, Series};
 use crate::sweep::{CaseSpec, Result, Results};
@@ -22,20 +22,27 @@ pub struct Restitution;
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct Def {
+    /// Scene of the pair (relative to `studies/`); contact 0 joins the two buildings.
     scene: String,
+    /// Analysis PGA, g: finite, > 0 (default 0.40).
     #[serde(default = "default_pga")]
     pga: f64,
     /// Record files (relative to `studies/`); default: the four Loma Prieta components
-    /// when `record_dirs` is not given either.
+    /// when `record_dirs` is not given either. With `record_dirs`, at least one record in all.
     records: Option<Vec<String>>,
-    /// Folders whose every `*.AT2` is added (sorted by file name).
+    /// Folders whose every `*.AT2` is added (sorted by file name); default none.
     #[serde(default)]
     record_dirs: Vec<String>,
-    /// Record metadata (pulse classes), relative to `studies/`.
+    /// Record metadata (pulse classes), relative to `studies/` (default
+    /// `../data/ground-motions/records.csv`).
     #[serde(default = "default_record_table")]
     record_table: String,
+    /// Gap of contact 0, m: finite, >= 0.
     gap: f64,
+    /// Coefficients of restitution c_r of the sweep: at least one, each in [0, 1].
     restitution: Vec<f64>,
+    /// Kelvin–Voigt gap-element stiffnesses, N/m: at least one, each > 0 (checked by the
+    /// scene in every case).
     gap_stiffness: Vec<f64>,
 }
 
@@ -87,6 +94,13 @@ impl Study for Restitution {
                 )
             },
         )?;
+        require_pga(ctx, d.pga)?;
+        super::require(ctx, is_gap(d.gap), || {
+            format!("`gap` = {:?}: expected a finite gap >= 0 (m)", d.gap)
+        })?;
+        super::require(ctx, !d.gap_stiffness.is_empty(), || {
+            "`gap_stiffness` = []: expected at least one gap-element stiffness (N/m)".into()
+        })?;
         let mut v = Vec::new();
         let recs = study_records(ctx, d.records.as_deref(), &d.record_dirs)?;
         record_classes(ctx, &d.record_table, &recs)?;

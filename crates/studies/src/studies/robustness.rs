@@ -18,13 +18,22 @@ pub struct Robustness;
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct Def {
+    /// Scene of the pair (relative to `studies/`); contact 0 joins the two buildings.
     scene: String,
+    /// Analysis PGA, g: finite, > 0 (default 0.40).
     #[serde(default = "default_pga")]
     pga: f64,
+    /// Folders whose every `*.AT2` is used (relative to `studies/`): at least one record in
+    /// all.
     record_dirs: Vec<String>,
+    /// Gaps of contact 0, m: at least one, each finite and >= 0.
     gaps: Vec<f64>,
+    /// Coefficients of restitution: at least one, each in [0, 1].
     restitution: Vec<f64>,
+    /// Kelvin–Voigt gap-element stiffness of both gap integrators, N/m: > 0 (checked by the
+    /// scene in every case).
     gap_stiffness: f64,
+    /// Newmark time step, s: > 0 and at most each record's step (checked by the scene).
     newmark_time_step: f64,
 }
 
@@ -105,10 +114,16 @@ fn case(ctx: &Ctx, d: &Def, rec: &str, method: usize, gap: f64, cr: f64) -> Case
 impl Study for Robustness {
     fn cases(&self, ctx: &Ctx) -> Result<Vec<CaseSpec>> {
         let d: Def = ctx.def()?;
+        super::require_pga(ctx, d.pga)?;
         super::require(
             ctx,
-            !d.gaps.is_empty() && d.gaps.iter().all(|g| *g >= 0.0),
-            || format!("`gaps` = {:?}: expected at least one gap >= 0 (m)", d.gaps),
+            !d.gaps.is_empty() && d.gaps.iter().all(|&g| super::is_gap(g)),
+            || {
+                format!(
+                    "`gaps` = {:?}: expected at least one gap, each finite and >= 0 (m)",
+                    d.gaps
+                )
+            },
         )?;
         super::require(
             ctx,

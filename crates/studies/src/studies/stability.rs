@@ -9,7 +9,10 @@
 use serde::Deserialize;
 use solvers::Method;
 
-use super::{default_pga, failures_note, logspace, record_label, write_summary, Ctx, Study};
+use super::{
+    default_pga, failures_note, is_gap, is_restitution, logspace, record_label, require,
+    require_count, require_list, require_pga, write_summary, Ctx, Study, MAX_GRID, MAX_MODES,
+};
 use crate::plot::{figure, Heat, Marker, Panel, PanelKind, Series};
 use crate::sweep::{CaseSpec, Result, Results};
 use crate::table::{e, f, Table};
@@ -22,16 +25,61 @@ const STABILITY_MODES: &str = "stability_cost_modes";
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct Def {
+    /// Scene of the pair (relative to `studies/`); contact 0 joins the two buildings.
     scene: String,
+    /// Analysis PGA, g: finite, > 0 (default 0.40).
     #[serde(default = "default_pga")]
     pga: f64,
+    /// The record (relative to `studies/`).
     record: String,
+    /// Gap of contact 0, m: finite, >= 0.
     gap: f64,
+    /// Newmark time steps, s: at least one, each > 0 and at most the record's step (checked
+    /// by the scene in every case).
     newmark_step: Vec<f64>,
+    /// Gap-element stiffnesses of the Newmark grid, N/m: at least one, each > 0 (checked by
+    /// the scene).
     newmark_stiffness: Vec<f64>,
+    /// Stiffnesses of the adaptive cost sweep (log-spaced 1e7 … 1e13 N/m):
+    /// 2 ..= [`MAX_GRID`] (1000).
     adaptive_stiffness_count: usize,
+    /// The paper impulse variant's restitution violation is run with 1 … this many modes:
+    /// 1 ..= [`MAX_MODES`] (1000).
     max_modes: usize,
+    /// Coefficients of restitution of the chattering runs: at least one, each in [0, 1].
     chatter_restitution: Vec<f64>,
+}
+
+/// The definition's values the scene does not check in every case: bad input (exit 2)
+/// before any case is built.
+fn validate(ctx: &Ctx, d: &Def) -> Result<()> {
+    require_pga(ctx, d.pga)?;
+    require(ctx, is_gap(d.gap), || {
+        format!("`gap` = {:?}: expected a finite gap >= 0 (m)", d.gap)
+    })?;
+    for (key, v) in [
+        ("newmark_step", &d.newmark_step),
+        ("newmark_stiffness", &d.newmark_stiffness),
+    ] {
+        require(ctx, !v.is_empty(), || {
+            format!("`{key}` = []: expected at least one value")
+        })?;
+    }
+    require_count(
+        ctx,
+        "adaptive_stiffness_count",
+        d.adaptive_stiffness_count,
+        2..=MAX_GRID,
+        "stiffnesses",
+    )?;
+    require_count(ctx, "max_modes", d.max_modes, 1..=MAX_MODES, "mode")?;
+    require_list(
+        ctx,
+        "chatter_restitution",
+        &d.chatter_restitution,
+        is_restitution,
+        "a coefficient of restitution in [0, 1]",
+    )
 }
 
 fn shrink(ctx: &Ctx, d: &mut Def) {
@@ -101,6 +149,7 @@ fn ks(d: &Def) -> Vec<f64> {
 impl Study for Stability {
     fn cases(&self, ctx: &Ctx) -> Result<Vec<CaseSpec>> {
         let mut d: Def = ctx.def()?;
+        validate(ctx, &d)?;
         shrink(ctx, &mut d);
         let mut v = Vec::new();
         for &k in &d.newmark_stiffness {

@@ -19,8 +19,9 @@ use solvers::Method;
 use super::record_table::PulseClass;
 use super::stats::{loglog_slope, median_band, Spread};
 use super::{
-    amp_contact, default_pga, default_record_table, failures_note, logspace, record_classes,
-    record_name, shear_error, study_records, write_summary, Ctx, Study,
+    amp_contact, default_pga, default_record_table, failures_note, is_gap, is_restitution,
+    logspace, record_classes, record_name, require_count, require_pga, shear_error, study_records,
+    write_summary, Ctx, Study, MAX_GRID,
 };
 use crate::plot::{figure, Panel, PanelKind, Series};
 use crate::sweep::{CaseSpec, Result, Results};
@@ -31,25 +32,37 @@ pub struct Stiffness;
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct Def {
+    /// Scene of the pair (relative to `studies/`); contact 0 joins the two buildings.
     scene: String,
+    /// Analysis PGA, g: finite, > 0 (default 0.40).
     #[serde(default = "default_pga")]
     pga: f64,
     /// Record files (relative to `studies/`); default: the four Loma Prieta components
-    /// when `record_dirs` is not given either.
+    /// when `record_dirs` is not given either. With `record_dirs`, at least one record in all.
     records: Option<Vec<String>>,
-    /// Folders whose every `*.AT2` is added (sorted by file name).
+    /// Folders whose every `*.AT2` is added (sorted by file name); default none.
     #[serde(default)]
     record_dirs: Vec<String>,
-    /// Record metadata (pulse classes), relative to `studies/`.
+    /// Record metadata (pulse classes), relative to `studies/` (default
+    /// `../data/ground-motions/records.csv`).
     #[serde(default = "default_record_table")]
     record_table: String,
+    /// Gap of contact 0, m: finite, >= 0.
     gap: f64,
+    /// Smallest gap-element stiffness of the log-spaced grid, N/m: finite, > 0.
     stiffness_min: f64,
+    /// Largest stiffness of the grid, N/m: finite, > `stiffness_min`.
     stiffness_max: f64,
+    /// Stiffnesses in the grid (log-spaced, `stiffness_min` … `stiffness_max`):
+    /// 2 ..= [`MAX_GRID`] (1000).
     stiffness_count: usize,
+    /// Coefficients of restitution: at least one, each in [0, 1] (linear law at 1,
+    /// Kelvin–Voigt below).
     restitution: Vec<f64>,
-    /// Smallest k used in the slope fit.
+    /// Smallest k used in the slope fit, N/m: `stiffness_min` <= it < `stiffness_max`.
     fit_min_stiffness: f64,
+    /// Local error tolerance of the adaptive gap element: in (0, 0.1) (checked by the scene
+    /// in every case).
     tolerance: f64,
 }
 
@@ -60,15 +73,23 @@ struct Grid {
 }
 
 fn grid(ctx: &Ctx, d: &Def) -> Result<Grid> {
-    super::require(ctx, d.stiffness_count >= 2, || {
-        format!(
-            "`stiffness_count` = {}: expected at least 2 stiffnesses",
-            d.stiffness_count
-        )
+    require_pga(ctx, d.pga)?;
+    super::require(ctx, is_gap(d.gap), || {
+        format!("`gap` = {:?}: expected a finite gap >= 0 (m)", d.gap)
     })?;
+    require_count(
+        ctx,
+        "stiffness_count",
+        d.stiffness_count,
+        2..=MAX_GRID,
+        "stiffnesses",
+    )?;
     super::require(
         ctx,
-        d.stiffness_min.is_finite() && d.stiffness_min > 0.0 && d.stiffness_max > d.stiffness_min,
+        d.stiffness_min.is_finite()
+            && d.stiffness_min > 0.0
+            && d.stiffness_max.is_finite()
+            && d.stiffness_max > d.stiffness_min,
         || {
             format!(
                 "`stiffness_min` = {:?}, `stiffness_max` = {:?}: expected 0 < min < max (N/m)",
@@ -76,9 +97,26 @@ fn grid(ctx: &Ctx, d: &Def) -> Result<Grid> {
             )
         },
     )?;
-    super::require(ctx, !d.restitution.is_empty(), || {
-        "`restitution` must list at least one c_r".into()
-    })?;
+    super::require(
+        ctx,
+        !d.restitution.is_empty() && d.restitution.iter().all(|&c| is_restitution(c)),
+        || {
+            format!(
+                "`restitution` = {:?}: must list at least one c_r, each in [0, 1]",
+                d.restitution
+            )
+        },
+    )?;
+    super::require(
+        ctx,
+        d.fit_min_stiffness >= d.stiffness_min && d.fit_min_stiffness < d.stiffness_max,
+        || {
+            format!(
+                "`fit_min_stiffness` = {:?}: expected `stiffness_min` <= it < `stiffness_max` ({:?} … {:?} N/m)",
+                d.fit_min_stiffness, d.stiffness_min, d.stiffness_max
+            )
+        },
+    )?;
     let (ks, crs) = if ctx.opts.quick {
         (
             logspace(d.stiffness_min, d.stiffness_max, 4),

@@ -80,7 +80,7 @@ struct Def {
     /// Scene of the pair (relative to `studies/`); contact 0 joins the two buildings.
     scene: String,
     /// Record files (relative to `studies/`); default: the four Loma Prieta components
-    /// when `record_dirs` is not given either.
+    /// when `record_dirs` is not given either. With `record_dirs`, at least one record in all.
     records: Option<Vec<String>>,
     /// Folders whose every `*.AT2` is added (sorted by file name).
     #[serde(default)]
