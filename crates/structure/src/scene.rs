@@ -23,6 +23,16 @@ use crate::model::{
 pub enum SceneError {
     #[error("cannot read scene file {file}: {}", crate::ground::record::io_reason(.error))]
     Io { file: String, error: std::io::Error },
+    /// The file is not UTF-8 text: `offset` (0-based) is the first invalid byte, on 1-based
+    /// `line` at byte `column` (1-based).
+    #[error("{file} line {line}, byte {column} (byte offset {offset}): expected UTF-8 text, found the invalid byte 0x{byte:02X}")]
+    Encoding {
+        file: String,
+        line: usize,
+        column: usize,
+        offset: usize,
+        byte: u8,
+    },
     #[error("{file}: {message}")]
     Parse { file: String, message: String },
     #[error("{file}: key `{key}`: {message}")]
@@ -517,9 +527,25 @@ impl Scene {
         purpose: Purpose,
     ) -> Result<Scene, SceneError> {
         let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|error| SceneError::Io {
+        let bytes = std::fs::read(path).map_err(|error| SceneError::Io {
             file: file.clone(),
             error,
+        })?;
+        let text = String::from_utf8(bytes).map_err(|e| {
+            let bytes = e.as_bytes();
+            let offset = e.utf8_error().valid_up_to();
+            let before = &bytes[..offset];
+            let line_start = before
+                .iter()
+                .rposition(|b| *b == b'\n')
+                .map_or(0, |i| i + 1);
+            SceneError::Encoding {
+                file: file.clone(),
+                line: before.iter().filter(|b| **b == b'\n').count() + 1,
+                column: offset - line_start + 1,
+                offset,
+                byte: bytes[offset],
+            }
         })?;
         let base = path.parent().unwrap_or(Path::new("."));
         let mut scene = Self::from_str_for(&text, &file, base, overrides, purpose)?;
@@ -562,11 +588,19 @@ impl Scene {
             serde_path_to_error::deserialize(toml::Value::Table(table)).map_err(
                 |e: serde_path_to_error::Error<toml::de::Error>| {
                     let inner = e.inner().to_string();
-                    parse_err(format!(
-                        "after --set overrides: key `{}`: {}",
-                        e.path(),
-                        inner.lines().next().unwrap_or("").trim_end()
-                    ))
+                    let first = inner.lines().next().unwrap_or("").trim_end();
+                    // A missing field is reported at its table (`.` for the top level): name
+                    // the field itself.
+                    let path = e.path().to_string();
+                    let key = match first
+                        .strip_prefix("missing field `")
+                        .and_then(|r| r.split_once('`'))
+                    {
+                        Some((field, _)) if path == "." => field.to_string(),
+                        Some((field, _)) => format!("{path}.{field}"),
+                        None => path,
+                    };
+                    parse_err(format!("after --set overrides: key `{key}`: {first}"))
                 },
             )?
         };
@@ -686,6 +720,28 @@ pub fn apply_override(table: &mut toml::Table, expr: &str) -> Result<(), SceneEr
     Ok(())
 }
 
+/// Floor masses a scene accepts, kg (1 g to a million tonnes a floor): with
+/// [`STIFFNESS_RANGE`] it keeps ω² = k/m and the solvers' products far from overflow and
+/// underflow.
+pub const MASS_RANGE: (f64, f64) = (1e-3, 1e12);
+
+/// Story stiffnesses a scene accepts, N/m (up to a wall-like 1e24 N/m).
+pub const STIFFNESS_RANGE: (f64, f64) = (1e-3, 1e24);
+
+/// Largest spread (k_max / k_min) · (m_max / m_min) · n² a building of n floors may have. It
+/// estimates the condition number of the eigenproblem M^(-1/2) K M^(-1/2): round-off
+/// perturbs its eigenvalues by about 1e-16 of the largest, so beyond about 1e16 the lowest
+/// ones come out zero or negative (measured on graded sticks of 2 … 1000 floors); 1e12
+/// keeps the lowest ω² accurate to about 1e-4 of itself.
+pub const MAX_SPREAD: f64 = 1e12;
+
+/// Target frequencies a calibration accepts (`target_frequencies_hz`), Hz.
+pub const FREQUENCY_RANGE: (f64, f64) = (1e-3, 1e3);
+
+/// Top-to-ground story stiffness ratios a one-frequency calibration accepts
+/// (`top_stiffness_ratio`); the two-frequency calibration spans 1/50 … 50.
+pub const TOP_STIFFNESS_RATIO_RANGE: (f64, f64) = (1e-2, 1e2);
+
 /// Most floors the `stories = N` shorthand accepts (a guard against absurd allocations;
 /// an explicit `masses` list is bounded by the file itself).
 pub const MAX_STORIES: usize = 1_000;
@@ -715,6 +771,16 @@ fn validate(
     let mut story_heights: Vec<Option<Vec<f64>>> = Vec::with_capacity(raw.buildings.len());
     for (bi, rb) in raw.buildings.into_iter().enumerate() {
         let key = |k: &str| format!("buildings[{bi}].{k}");
+        if rb.name.trim().is_empty() {
+            return Err(invalid(
+                key("name"),
+                format!(
+                    "{:?}: expected a non-empty name (it names the building in contacts and \
+                     output columns)",
+                    rb.name
+                ),
+            ));
+        }
         if rb.name == WALL {
             return Err(invalid(
                 key("name"),
@@ -785,6 +851,22 @@ fn validate(
                 format!("{m}: expected a finite mass > 0 (kg)"),
             ));
         }
+        let (m_lo, m_hi) = MASS_RANGE;
+        if let Some((i, m)) = masses
+            .iter()
+            .enumerate()
+            .find(|(_, m)| !(m_lo..=m_hi).contains(*m))
+        {
+            let k = if rb.masses.is_some() {
+                format!("buildings[{bi}].masses[{i}]")
+            } else {
+                key("mass")
+            };
+            return Err(invalid(
+                k,
+                format!("{m:e}: expected a floor mass in [{m_lo:e}, {m_hi:e}] kg"),
+            ));
+        }
         let n = masses.len();
         let heights = match rb.story_height {
             None => None,
@@ -822,6 +904,21 @@ fn validate(
             }
         };
         story_heights.push(heights);
+        // The key the story stiffnesses came from: a list, a scalar or a calibration.
+        let stiffness_scalar = matches!(rb.story_stiffness, Some(ScalarOrList::Scalar(_)));
+        if let (None, Some(f)) = (&rb.story_stiffness, &rb.target_frequencies_hz) {
+            let (f_lo, f_hi) = FREQUENCY_RANGE;
+            if let Some((i, f)) = f
+                .iter()
+                .enumerate()
+                .find(|(_, f)| !(f_lo..=f_hi).contains(*f))
+            {
+                return Err(invalid(
+                    format!("buildings[{bi}].target_frequencies_hz[{i}]"),
+                    format!("{f:e}: expected a frequency in [{f_lo:e}, {f_hi:e}] Hz"),
+                ));
+            }
+        }
         let (stiffness, calibrated) = match (rb.story_stiffness, &rb.target_frequencies_hz) {
             (Some(_), Some(_)) => {
                 return Err(invalid(
@@ -851,10 +948,17 @@ fn validate(
                         "calibration needs a uniform floor mass".into(),
                     ));
                 }
+                let (r_lo, r_hi) = TOP_STIFFNESS_RATIO_RANGE;
                 if !(r.is_finite() && r > 0.0) {
                     return Err(invalid(
                         key("top_stiffness_ratio"),
-                        format!("{r}: expected a finite ratio > 0 (top story stiffness / ground story stiffness)"),
+                        format!("{r}: expected a finite ratio > 0 (top story stiffness / ground story stiffness), in [{r_lo:e}, {r_hi:e}]"),
+                    ));
+                }
+                if !(r_lo..=r_hi).contains(&r) {
+                    return Err(invalid(
+                        key("top_stiffness_ratio"),
+                        format!("{r:e}: expected a ratio of the top to the ground story stiffness in [{r_lo:e}, {r_hi:e}]"),
                     ));
                 }
                 let c = calibrate_first_frequency(
@@ -902,7 +1006,6 @@ fn validate(
                 ))
             }
         };
-        let _ = calibrated;
         if stiffness.len() != n {
             return Err(invalid(
                 key("story_stiffness"),
@@ -920,6 +1023,82 @@ fn validate(
             return Err(invalid(
                 format!("buildings[{bi}].story_stiffness[{i}]"),
                 format!("{k}: expected a finite stiffness > 0 (N/m)"),
+            ));
+        }
+        // Absolute range and spread of the stiffnesses (and masses): errors name the key the
+        // stiffnesses came from (a calibration's `target_frequencies_hz`).
+        let calibration_key = || {
+            if rb.top_stiffness_ratio.is_some() {
+                "target_frequencies_hz` with `top_stiffness_ratio"
+            } else {
+                "target_frequencies_hz"
+            }
+        };
+        let (k_lo, k_hi) = STIFFNESS_RANGE;
+        if let Some((i, k)) = stiffness
+            .iter()
+            .enumerate()
+            .find(|(_, k)| !(k_lo..=k_hi).contains(*k))
+        {
+            return Err(match &calibrated {
+                Some(_) => invalid(
+                    key("target_frequencies_hz"),
+                    format!(
+                        "the calibration (`{}`) gives story {} a stiffness of {k:e} N/m: expected \
+                         story stiffnesses in [{k_lo:e}, {k_hi:e}] N/m; lower the frequencies \
+                         or the masses",
+                        calibration_key(),
+                        i + 1
+                    ),
+                ),
+                None => invalid(
+                    if stiffness_scalar {
+                        key("story_stiffness")
+                    } else {
+                        format!("buildings[{bi}].story_stiffness[{i}]")
+                    },
+                    format!("{k:e}: expected a story stiffness in [{k_lo:e}, {k_hi:e}] N/m"),
+                ),
+            });
+        }
+        let span = |v: &[f64]| {
+            v.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), x| {
+                (lo.min(*x), hi.max(*x))
+            })
+        };
+        let (k_min, k_max) = span(&stiffness);
+        let (m_min, m_max) = span(&masses);
+        let (k_ratio, m_ratio) = (k_max / k_min, m_max / m_min);
+        let spread = k_ratio * m_ratio * (n * n) as f64;
+        if spread > MAX_SPREAD {
+            let which = if calibrated.is_some() {
+                key("target_frequencies_hz")
+            } else if k_ratio >= m_ratio {
+                key("story_stiffness")
+            } else {
+                key("masses")
+            };
+            return Err(invalid(
+                which,
+                format!(
+                    "story stiffnesses from {k_min:e} to {k_max:e} N/m (ratio {k_ratio:.3e}) and \
+                     masses from {m_min:e} to {m_max:e} kg (ratio {m_ratio:.3e}) on {n} floor(s) \
+                     make the modes ill-conditioned: expected (largest / smallest story \
+                     stiffness) × (largest / smallest mass) × floors² at most {MAX_SPREAD:e}, \
+                     found {spread:.3e}"
+                ),
+            ));
+        }
+        if let Some((i, f)) = rb
+            .reference_frequencies_hz
+            .iter()
+            .flatten()
+            .enumerate()
+            .find(|(_, f)| !(f.is_finite() && **f > 0.0))
+        {
+            return Err(invalid(
+                format!("buildings[{bi}].reference_frequencies_hz[{i}]"),
+                format!("{f}: expected a finite frequency > 0 (Hz)"),
             ));
         }
         let story_law =
@@ -1225,10 +1404,17 @@ fn validate(
             let format = match fmt_name.as_str() {
                 "at2" => {
                     if g.units.is_some() || g.dt.is_some() {
+                        let present: Vec<&str> =
+                            [("units", g.units.is_some()), ("dt", g.dt.is_some())]
+                                .into_iter()
+                                .filter_map(|(k, given)| given.then_some(k))
+                                .collect();
                         return Err(invalid(
-                            key("units"),
-                            "AT2 records state their units (header line 3) and dt (line 4); remove `units`/`dt`"
-                                .into(),
+                            key(present[0]),
+                            format!(
+                                "AT2 records state their units (header line 3) and dt (line 4); remove `{}`",
+                                present.join("` and `")
+                            ),
                         ));
                     }
                     RecordFormat::At2
@@ -1299,7 +1485,7 @@ fn validate(
                     format!(
                         " (`{}` is taken relative to the scene's folder, {})",
                         g.file,
-                        base_dir.display()
+                        folder_name(base_dir)
                     )
                 } else {
                     String::new()
@@ -1479,6 +1665,20 @@ fn validate(
         gap_element: gap,
         limits,
     })
+}
+
+/// A folder for messages: `.` for the empty parent of a bare file name (`scene.toml`),
+/// followed by its absolute form when that differs and can be found.
+fn folder_name(dir: &Path) -> String {
+    let shown = if dir.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        dir
+    };
+    match std::fs::canonicalize(shown) {
+        Ok(abs) if abs != shown => format!("{} ({})", shown.display(), abs.display()),
+        _ => shown.display().to_string(),
+    }
 }
 
 /// The story law of a building from its keys `story_law`, `yield_shear` (N, one for every

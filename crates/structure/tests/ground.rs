@@ -389,11 +389,14 @@ fn two_column_errors() {
     assert!(matches!(e, RecordError::Value { line: 2, .. }), "{e:?}");
     let e = GroundMotion::from_two_column_str("0 1\n0 2\n", "t.csv", Units::G).unwrap_err();
     assert!(
-        matches!(e, RecordError::BadDt { line: Some(2), .. }),
+        matches!(e, RecordError::TimeNotIncreasing { line: 2, .. }),
         "{e:?}"
     );
     let e = GroundMotion::from_two_column_str("1 1\n0 2\n", "t.csv", Units::G).unwrap_err();
-    assert!(matches!(e, RecordError::BadDt { .. }), "{e:?}");
+    assert!(
+        matches!(e, RecordError::TimeNotIncreasing { line: 2, .. }),
+        "{e:?}"
+    );
     let e = GroundMotion::from_two_column_str("0 1\n0.01 abc\n", "t.csv", Units::G).unwrap_err();
     assert!(
         matches!(

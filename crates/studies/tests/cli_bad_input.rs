@@ -244,13 +244,22 @@ fn record_zero_and_negative_dt() {
     let neg = at2("NPTS=    5, DT=  -0.0100 SEC", VALUES5);
     record_case("dtneg.AT2", &neg, &[], "", &["line 4", "DT > 0", "-0.01"]);
     // Two-column: a repeated or decreasing time.
-    record_case("t0.txt", "0 1\n0 2\n0 3\n", &[], "", &["line 2", "> 0"]);
+    record_case(
+        "t0.txt",
+        "0 1\n0 2\n0 3\n",
+        &[],
+        "",
+        &["line 2", "time 0 s at line 2 is not after 0 s at line 1"],
+    );
     record_case(
         "tneg.txt",
         "0 1\n-0.01 2\n-0.02 3\n",
         &[],
         "",
-        &["line 2", "> 0"],
+        &[
+            "line 2",
+            "time -0.01 s at line 2 is not after 0 s at line 1",
+        ],
     );
 }
 

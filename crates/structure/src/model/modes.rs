@@ -50,10 +50,27 @@ impl Modes {
         for mode in 0..n {
             let l = lam[mode];
             if !(l.is_finite() && l > 0.0) {
+                // A valid building's K is positive definite (every story stiffness > 0): a
+                // non-positive eigenvalue is round-off swamping the smallest ones, i.e. an
+                // ill-conditioned problem. Say what was found and the spreads behind it.
+                let span = |v: &[f64]| {
+                    v.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), x| {
+                        (lo.min(*x), hi.max(*x))
+                    })
+                };
+                let (k_lo, k_hi) = span(&b.story_stiffness);
+                let (m_lo, m_hi) = span(&b.masses);
+                let l_max = (0..n).map(|i| lam[i]).fold(f64::NAN, f64::max);
                 return Err(ModelError::Eigen {
                     building: b.name.clone(),
                     reason: format!(
-                        "eigenvalue {mode} is {l}: the stiffness matrix is not positive definite"
+                        "mode {} has ω² = {l:e} rad²/s² (the largest is {l_max:e}), not a finite \
+                         value > 0: with story stiffnesses from {k_lo:e} to {k_hi:e} N/m \
+                         (ratio {:e}) and masses from {m_lo:e} to {m_hi:e} kg (ratio {:e}) the \
+                         eigenproblem is too ill-conditioned for double precision",
+                        mode + 1,
+                        k_hi / k_lo,
+                        m_hi / m_lo
                     ),
                 });
             }
