@@ -3,6 +3,8 @@
 //! expected. And every committed scene (and every study's overrides of it) still loads under
 //! the new ranges.
 
+mod common;
+use common::err_has;
 use std::path::{Path, PathBuf};
 
 use structure::ground::{GroundMotion, RecordError, Units};
@@ -20,19 +22,6 @@ fn fixtures_dir() -> PathBuf {
 fn load(text: &str, overrides: &[&str]) -> Result<Scene, SceneError> {
     let o: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
     Scene::from_str_with_overrides(text, "scene.toml", &fixtures_dir(), &o)
-}
-
-/// The error message of `r`, which must be an error containing every one of `parts`.
-#[track_caller]
-fn err_has(r: Result<Scene, SceneError>, parts: &[&str]) -> String {
-    let msg = match r {
-        Ok(_) => panic!("expected an error containing {parts:?}, the scene loaded"),
-        Err(e) => e.to_string(),
-    };
-    for p in parts {
-        assert!(msg.contains(p), "error {msg:?} should contain {p:?}");
-    }
-    msg
 }
 
 /// One building `a` with the given keys, a free-vibration analysis of 1 s.

@@ -5,6 +5,8 @@
 //! The command-line side of the bad-input catalogue (exit code 2, no partial output) lives in
 //! `crates/studies/tests/cli_bad_input.rs`.
 
+mod common;
+use common::err_has;
 use std::path::{Path, PathBuf};
 
 use proptest::prelude::*;
@@ -39,19 +41,6 @@ fn load_str(text: &str, overrides: &[&str]) -> Result<Scene, SceneError> {
 fn load_paper(overrides: &[&str]) -> Scene {
     let o: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
     Scene::from_file_with_overrides(&paper_scene_path(), &o).unwrap()
-}
-
-/// Asserts that `r` is an error whose message contains every one of `parts`.
-#[track_caller]
-fn err_has(r: Result<Scene, SceneError>, parts: &[&str]) -> String {
-    let msg = match r {
-        Ok(_) => panic!("expected an error containing {parts:?}, the scene loaded"),
-        Err(e) => e.to_string(),
-    };
-    for p in parts {
-        assert!(msg.contains(p), "error {msg:?} should contain {p:?}");
-    }
-    msg
 }
 
 const TINY: &str = r#"
