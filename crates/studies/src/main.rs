@@ -802,14 +802,19 @@ fn studies_command(command: StudiesCommand) -> Result<()> {
             let t0 = std::time::Instant::now();
             let mut timings = serde_json::Map::new();
             let mut unexpected = Vec::new();
+            // A definition or scene the study cannot use is bad input (exit 2).
+            let bad = |n: &str, e: studies::sweep::StudyError| match e {
+                studies::sweep::StudyError::Definition { .. } => input(format!("study `{n}`: {e}")),
+                e => anyhow::Error::new(e).context(format!("study `{n}`")),
+            };
+            // Every study's definition and case list first (0.3 s for all of them, one run),
+            // so that a bad definition of a later study stops the command before any study
+            // has written its outputs.
             for n in &names {
-                let r = st::run_study(n, &cfg).map_err(|e| match e {
-                    // A definition or scene the study cannot use is bad input (exit 2).
-                    studies::sweep::StudyError::Definition { .. } => {
-                        input(format!("study `{n}`: {e}"))
-                    }
-                    e => anyhow::Error::new(e).context(format!("study `{n}`")),
-                })?;
+                st::check_study(n, &cfg).map_err(|e| bad(n, e))?;
+            }
+            for n in &names {
+                let r = st::run_study(n, &cfg).map_err(|e| bad(n, e))?;
                 // Failures the study exists to show (e.g. chattering without the persistent
                 // contact phase) are results; say so, so they do not read as errors.
                 let failed = match (r.summary.failed, r.unexpected.len()) {

@@ -371,3 +371,37 @@ fn every_committed_definition_validates() {
         "validating writes nothing"
     );
 }
+
+/// Several studies in one command: every definition is checked before the first study runs,
+/// so a bad definition of a later study (`gap`, after `paper`) stops the command with nothing
+/// written, not after the earlier studies have written their outputs.
+#[test]
+fn a_bad_later_definition_stops_the_command_before_any_study_runs() {
+    let d = TempDir::new("study-def-later");
+    let dir = d.path("studies");
+    copy_studies(Path::new(STUDIES), &dir);
+    let path = dir.join("gap.toml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    std::fs::write(&path, set_key(&text, "gap_count", "1000000000")).unwrap();
+    let out = d.path("out");
+    let o = pound(&[
+        "studies",
+        "run",
+        "paper",
+        "gap",
+        "--quick",
+        "--studies-dir",
+        dir.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("gap.toml") && err.contains("gap_count"),
+        "{err}"
+    );
+    assert!(!err.contains("panicked"), "{err}");
+    let written = files_under(&out);
+    assert!(written.is_empty(), "nothing written: {written:?}");
+}

@@ -520,8 +520,11 @@ fn read_definition(cfg: &RunConfig, name: &str) -> Result<(String, String)> {
 
 /// Runs one study (all its missing cases, or a shard of them) and, unless sharded, writes
 /// its tables, figures and summary.
-pub fn run_study(name: &str, cfg: &RunConfig) -> Result<StudyRun> {
-    let t0 = Instant::now();
+/// A study ready to run: the study, its definition's text, its context and its full case
+/// list, built and checked without writing anything.
+type Prepared = (&'static dyn Study, String, Ctx, Vec<CaseSpec>);
+
+fn prepare(name: &str, cfg: &RunConfig) -> Result<Prepared> {
     let st = study(name).ok_or_else(|| {
         StudyError::Other(format!(
             "unknown study `{name}` (studies: {}, {})",
@@ -532,6 +535,20 @@ pub fn run_study(name: &str, cfg: &RunConfig) -> Result<StudyRun> {
     let (text, file) = read_definition(cfg, name)?;
     let ctx = make_ctx(name, &text, &file, cfg, &cfg.opts)?;
     let specs = all_cases(st, &ctx)?;
+    Ok((st, text, ctx, specs))
+}
+
+/// Checks a study's definition and builds its case list, writing nothing: all that
+/// [`run_study`] does before its first write. Returns the number of cases. `pound studies
+/// run` checks every study it is given this way before running the first, so that a bad
+/// definition of a later study stops the command before any study has written its outputs.
+pub fn check_study(name: &str, cfg: &RunConfig) -> Result<usize> {
+    Ok(prepare(name, cfg)?.3.len())
+}
+
+pub fn run_study(name: &str, cfg: &RunConfig) -> Result<StudyRun> {
+    let t0 = Instant::now();
+    let (st, text, ctx, specs) = prepare(name, cfg)?;
     write_json(
         &ctx.dir.join("manifest.json"),
         &Manifest {
