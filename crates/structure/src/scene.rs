@@ -841,13 +841,21 @@ fn validate(
                 "is empty: expected one mass (kg) per floor, at least one floor".into(),
             ));
         }
+        // The key as written: `masses[i]`, or `mass` for the `stories` + `mass` shorthand.
+        let mass_key = |i: usize| {
+            if rb.masses.is_some() {
+                format!("buildings[{bi}].masses[{i}]")
+            } else {
+                key("mass")
+            }
+        };
         if let Some((i, m)) = masses
             .iter()
             .enumerate()
             .find(|(_, m)| !(m.is_finite() && **m > 0.0))
         {
             return Err(invalid(
-                format!("buildings[{bi}].masses[{i}]"),
+                mass_key(i),
                 format!("{m}: expected a finite mass > 0 (kg)"),
             ));
         }
@@ -857,13 +865,8 @@ fn validate(
             .enumerate()
             .find(|(_, m)| !(m_lo..=m_hi).contains(*m))
         {
-            let k = if rb.masses.is_some() {
-                format!("buildings[{bi}].masses[{i}]")
-            } else {
-                key("mass")
-            };
             return Err(invalid(
-                k,
+                mass_key(i),
                 format!("{m:e}: expected a floor mass in [{m_lo:e}, {m_hi:e}] kg"),
             ));
         }
@@ -1020,10 +1023,26 @@ fn validate(
             .enumerate()
             .find(|(_, k)| !(k.is_finite() && **k > 0.0))
         {
-            return Err(invalid(
-                format!("buildings[{bi}].story_stiffness[{i}]"),
-                format!("{k}: expected a finite stiffness > 0 (N/m)"),
-            ));
+            // The key as written: `story_stiffness[i]`, `story_stiffness` for one number for
+            // every story, `target_frequencies_hz` for a calibrated building.
+            return Err(match &calibrated {
+                Some(_) => invalid(
+                    key("target_frequencies_hz"),
+                    format!(
+                        "the calibration gives story {} a stiffness of {k} N/m: expected a \
+                         finite stiffness > 0",
+                        i + 1
+                    ),
+                ),
+                None => invalid(
+                    if stiffness_scalar {
+                        key("story_stiffness")
+                    } else {
+                        format!("buildings[{bi}].story_stiffness[{i}]")
+                    },
+                    format!("{k}: expected a finite stiffness > 0 (N/m)"),
+                ),
+            });
         }
         // Absolute range and spread of the stiffnesses (and masses): errors name the key the
         // stiffnesses came from (a calibration's `target_frequencies_hz`).

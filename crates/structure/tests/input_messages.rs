@@ -498,3 +498,28 @@ fn every_committed_scene_and_study_variant_loads() {
     }
     assert!(loaded >= 13, "{loaded} study scenes loaded");
 }
+
+/// A non-positive or non-finite value given by a shorthand (`stories` + `mass`, one
+/// `story_stiffness` for every story) is refused under the key as written, not under the
+/// expanded `masses[i]` / `story_stiffness[i]` that are not in the file.
+#[test]
+fn shorthand_values_are_named_as_written() {
+    let m = err_has(
+        load(&one("stories = 2\nmass = nan\nstory_stiffness = 1e9"), &[]),
+        &["key `buildings[0].mass`", "NaN", "> 0"],
+    );
+    assert!(!m.contains("masses["), "{m}");
+    let m = err_has(
+        load(&one("stories = 2\nmass = 1e5\nstory_stiffness = -1.0"), &[]),
+        &["key `buildings[0].story_stiffness`", "-1", "> 0"],
+    );
+    assert!(!m.contains("story_stiffness["), "{m}");
+    // The lists keep their index.
+    err_has(
+        load(
+            &one("masses = [1e5, 0.0]\nstory_stiffness = [1e9, 1e9]"),
+            &[],
+        ),
+        &["key `buildings[0].masses[1]`", "> 0"],
+    );
+}

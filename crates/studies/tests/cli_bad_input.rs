@@ -652,13 +652,13 @@ fn scene_non_positive_or_non_finite_masses_and_stiffnesses() {
         "masses = [1.0e5, 1.0e5]\nstory_stiffness = [1.0e8, 1.0e8]",
         "stories = 2\nmass = -1.0\nstory_stiffness = 1.0e8",
     );
-    scene_case(&short, &[], &["buildings[0].masses[0]", "> 0"]);
+    scene_case(&short, &[], &["buildings[0].mass`", "> 0"]);
     let short = edit(
         &base,
         "masses = [1.0e5, 1.0e5]\nstory_stiffness = [1.0e8, 1.0e8]",
         "stories = 2\nmass = 1.0e5\nstory_stiffness = 0.0",
     );
-    scene_case(&short, &[], &["buildings[0].story_stiffness[0]", "> 0"]);
+    scene_case(&short, &[], &["buildings[0].story_stiffness`", "> 0"]);
     let short = edit(
         &base,
         "masses = [1.0e5, 1.0e5]\nstory_stiffness = [1.0e8, 1.0e8]",
