@@ -67,8 +67,11 @@ fn gap_element_converges_to_the_momentum_answer_with_order_one_half_in_k() {
         .sum::<f64>()
         / lx.iter().map(|a| (a - mx).powi(2)).sum::<f64>();
     eprintln!("fitted log-log slope of the error against k: {slope:.3}");
+    // Order ½ in k within ±0.06 (the band wall.rs uses for the same physics, [−0.55, −0.45],
+    // widened by 0.01 each side for the two-body scene): measured −0.490, 0.05 and 0.07 from
+    // the edges; refuses k^-1/3 and k^-2/3.
     assert!(
-        (-0.7..=-0.35).contains(&slope),
+        (-0.56..=-0.44).contains(&slope),
         "order in k: {slope} (errors {errs:?})"
     );
     for w in errs.windows(2) {

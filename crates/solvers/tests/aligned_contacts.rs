@@ -2,11 +2,11 @@
 //! simultaneous contacts exercise the joint impulse (a small LCP) of the momentum method.
 //! Its answer is the limit of the gap element as the spring stiffens: a linear penalty
 //! spring lets the floors penetrate by δ ≈ v √(m_eff/k), so every response of the gap
-//! element approaches the momentum method's as k^-1/2 — by √100 = 10 from k = 1e12 to
-//! 1e14 N/m. The test asserts that rate (with a factor 2.5 of margin) on every peak story
-//! shear and floor displacement of both buildings, with c_r = 1 (the linear law is
-//! elastic), over the first 12 s of the record (the first impacts and the strongest
-//! shaking of CAP000), at 10 and 5 cm.
+//! element approaches the momentum method's as k^-1/2 — by √10 per decade of stiffness.
+//! The test asserts that rate (a log-log slope fitted over k = 1e12 to 1e15 N/m, within
+//! ±0.1 of −½) on every peak story shear and floor displacement of both buildings, with
+//! c_r = 1 (the linear law is elastic), over the first 12 s of the record (the first
+//! impacts and the strongest shaking of CAP000), at 10 and 5 cm.
 
 use solvers::{gap, momentum, RunOutput};
 use structure::testing::paper_scene_aligned as paper_aligned;
@@ -36,6 +36,19 @@ fn difference(a: &RunOutput, reference: &RunOutput) -> f64 {
     worst
 }
 
+/// Least-squares slope of ln y against ln x.
+fn log_log_slope(x: &[f64], y: &[f64]) -> f64 {
+    let lx: Vec<f64> = x.iter().map(|v| v.ln()).collect();
+    let ly: Vec<f64> = y.iter().map(|v| v.ln()).collect();
+    let n = lx.len() as f64;
+    let (mx, my) = (lx.iter().sum::<f64>() / n, ly.iter().sum::<f64>() / n);
+    lx.iter()
+        .zip(&ly)
+        .map(|(a, b)| (a - mx) * (b - my))
+        .sum::<f64>()
+        / lx.iter().map(|a| (a - mx).powi(2)).sum::<f64>()
+}
+
 #[test]
 fn momentum_is_the_stiff_limit_of_the_gap_element_with_contact_at_every_floor() {
     for gap in ["0.10", "0.05"] {
@@ -60,14 +73,22 @@ fn momentum_is_the_stiff_limit_of_the_gap_element_with_contact_at_every_floor() 
             ]);
             difference(&gap::solve(&s, None).unwrap(), &m)
         };
-        let (e12, e14) = (e("1e12"), e("1e14"));
-        eprintln!("gap {gap} m: struck contacts {struck:?}; gap element vs momentum: k=1e12 {e12:.3e}, k=1e14 {e14:.3e}");
-        // k^-1/2 over two decades is a factor 10; [4, 25] accepts slopes 0.3–0.7 and
-        // refuses k^-1 (100) and no convergence (1). Measured 8.1 and 13.6.
-        let ratio = e12 / e14;
+        let ks = [1e12, 1e13, 1e14, 1e15];
+        let errs: Vec<f64> = ks.iter().map(|k| e(&format!("{k:e}"))).collect();
+        eprintln!("gap {gap} m: struck contacts {struck:?}; gap element vs momentum at k = {ks:?}: {errs:?}");
+        // Every decade of stiffness brings the gap element closer (measured ÷2.8 to ÷4.7).
+        for w in errs.windows(2) {
+            assert!(w[1] < w[0], "{gap}: {errs:?}");
+        }
+        // Least-squares slope of log error against log k over three decades: −½ within
+        // [−0.60, −0.40], which refuses k^-1/3 and k^-2/3 (and k^-1, and no convergence).
+        // Measured −0.466 (0.10 m) and −0.529 (0.05 m): 0.066 and 0.071 inside the band,
+        // where the pre-asymptotic two-point ratios from 1e12 to 1e14 (8.1, 13.6) would leave
+        // almost no room in the corresponding [6, 16].
+        let slope = log_log_slope(&ks, &errs);
         assert!(
-            (4.0..=25.0).contains(&ratio),
-            "{gap}: {e12:.3e} -> {e14:.3e} (÷{ratio:.1}), not the k^-1/2 rate"
+            (-0.60..=-0.40).contains(&slope),
+            "{gap}: slope {slope:.3} over k = {ks:?} (errors {errs:?}), not the k^-1/2 rate"
         );
     }
 }
@@ -95,8 +116,10 @@ fn zero_gap_with_every_floor_touching_runs_on_the_loma_prieta_records() {
             let m = momentum::solve(&s, None).unwrap_or_else(|e| panic!("{rec}, c_r {cr}: {e}"));
             assert!(!m.impacts.is_empty(), "{rec}, c_r {cr}");
             let e = &m.energy;
+            // Round-off accumulated over the many held segments and releases: measured
+            // 8.5e-14 to 1.8e-11 (RSN767 G03000, c_r = 0) of the input; 1e-10 leaves 5×.
             assert!(
-                e.balance_error.abs() <= 1e-9 * e.input.abs().max(e.damping),
+                e.balance_error.abs() <= 1e-10 * e.input.abs().max(e.damping),
                 "{rec}, c_r {cr}: {e:?}"
             );
         }

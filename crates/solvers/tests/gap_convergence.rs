@@ -151,7 +151,9 @@ fn newmark_converges_to_the_adaptive_answer_at_second_order() {
     let p = slope(&dts, &errs);
     eprintln!("observed order {p:.3}");
     assert!((1.7..=2.4).contains(&p), "order {p}, errors {errs:?}");
-    assert!(errs[3] < 1e-3, "{errs:?}");
+    // At the finest step (Δt = 0.3125 ms) the relative displacement error is measured
+    // 3.28e-6: within 1e-5 (margin 3; the next coarser step, 1.33e-5, would fail it).
+    assert!(errs[3] < 1e-5, "{errs:?}");
 }
 
 #[test]

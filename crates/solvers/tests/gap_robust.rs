@@ -4,6 +4,7 @@
 
 use solvers::gap::solve;
 use solvers::{RunOutput, SolverError};
+use structure::scene::Integrator;
 use structure::testing::paper_scene as paper;
 use structure::testing::paper_scene_path;
 use structure::Scene;
@@ -34,6 +35,14 @@ fn assert_sound(out: &RunOutput, energy_tol: f64) {
     assert!(e.balance_error.abs() < energy_tol * e.input.abs(), "{e:?}");
 }
 
+/// Relative energy-balance bound of a Newmark run: its audit sums the trapezoidal works the
+/// average-acceleration scheme conserves exactly, so the balance closes to round-off, 16 ε
+/// per step as in `gap_energy.rs` (measured here 1.4e-15 to 1.6e-13 over 30 000–48 000 steps,
+/// against bounds of 1.1–1.7e-10).
+fn newmark_bound(out: &RunOutput) -> f64 {
+    16.0 * out.stats.steps as f64 * f64::EPSILON
+}
+
 const NEWMARK_KV: [&str; 4] = [
     "gap_element.law=kelvin-voigt",
     "gap_element.stiffness=1e10",
@@ -61,7 +70,7 @@ fn newmark_settles_the_clamped_dashpot_at_1_ms() {
         );
         assert!(!out.impacts.is_empty());
         // Newmark's trapezoidal energy sums close to round-off (see gap_energy.rs).
-        assert_sound(&out, 1e-9);
+        assert_sound(&out, newmark_bound(&out));
     }
 }
 
@@ -77,7 +86,7 @@ fn newmark_with_tension_and_floors_touching_at_the_start_finishes() {
     s.buildings[0].initial_velocity = vec![0.2; 15];
     let out = solve(&s, None).unwrap();
     assert_eq!(out.impacts[0].time, 1e-3);
-    assert_sound(&out, 1e-9);
+    assert_sound(&out, newmark_bound(&out));
 }
 
 /// Adaptive and Newmark on near-field records at c_r < 1: every achieved restitution in
@@ -93,7 +102,15 @@ fn gap_restitution_is_in_the_unit_interval_or_null_with_a_reason() {
             for cr in ["0.65", "0.3"] {
                 let s = near_field(integ, rec, gap, cr);
                 let out = solve(&s, None).unwrap_or_else(|e| panic!("{rec}: {e}"));
-                assert_sound(&out, 1e-7);
+                assert!(!out.impacts.is_empty(), "{rec}");
+                // Newmark: round-off. Adaptive: the balance's terms are integrated with the
+                // motion, so it closes to the error control, 10 × rtol = 1e-7 at the scene's
+                // rtol 1e-8 (measured 1.3–2.6e-9).
+                let tol = match s.gap_element.integrator {
+                    Integrator::Newmark => newmark_bound(&out),
+                    Integrator::Adaptive => 10.0 * s.gap_element.tolerance,
+                };
+                assert_sound(&out, tol);
             }
         }
     }
@@ -126,7 +143,10 @@ fn stiff_scene_is_refused_by_the_explicit_integrator_and_runs_with_newmark() {
     }
     s.gap_element.integrator = structure::scene::Integrator::Newmark;
     s.gap_element.time_step = 1e-3;
-    assert!(solve(&s, None).is_ok());
+    let out = solve(&s, None).unwrap();
+    // The floors do meet the wall (8 contact episodes measured), and the run is sound.
+    assert!(!out.impacts.is_empty());
+    assert_sound(&out, newmark_bound(&out));
     s.duration = 1e300;
     assert!(matches!(solve(&s, None), Err(SolverError::Refused { .. })));
 }

@@ -109,7 +109,10 @@ fn paper_scenes_match_the_momentum_method_with_all_modes() {
 #[test]
 fn the_difference_from_the_momentum_method_follows_the_tolerance() {
     // Free flight and impacts are the same equations, so the difference is the adaptive
-    // integration error: a hundred times tighter tolerance makes it much smaller.
+    // integration error, proportional to the tolerance: a hundred times tighter tolerance
+    // divides it by about a hundred (measured 88.6 for the peaks, 88.3 for the impact
+    // times). Asserted within [30, 300], a fitted slope in about [0.74, 1.24] (margins of 2.9
+    // below and 3.4 above).
     let mut diffs = vec![];
     for tol in [1e-8, 1e-10] {
         let scene = paper_scene(&[&format!("gap_element.tolerance={tol}")]);
@@ -119,9 +122,10 @@ fn the_difference_from_the_momentum_method_follows_the_tolerance() {
         diffs.push((peak_diff(&mom, &imp), impact_diffs(&mom, &imp).0));
     }
     eprintln!("(peaks, impact times) at tol 1e-8, 1e-10: {diffs:?}");
+    let ratios = (diffs[0].0 / diffs[1].0, diffs[0].1 / diffs[1].1);
     assert!(
-        diffs[1].0 < diffs[0].0 / 10.0 && diffs[1].1 < diffs[0].1 / 10.0,
-        "{diffs:?}"
+        (30.0..=300.0).contains(&ratios.0) && (30.0..=300.0).contains(&ratios.1),
+        "error ratios {ratios:?} for a 100× tighter tolerance: {diffs:?}"
     );
 }
 

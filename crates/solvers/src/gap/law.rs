@@ -10,7 +10,7 @@
 //! | `linear` | F = k δ | ignored: the spring is elastic, the achieved restitution is 1 (up to the structure's own motion) | δ = 0 |
 //! | `kelvin-voigt`, `tension = true` | F = k δ + c δ̇ | c = 2ξ√(k m_eff), ξ = −ln e / √(π² + ln² e) (Anagnostopoulos 1988; ξ = 1 for e = 0) | δ = 0 (F may turn tensile just before: delivers e exactly for two free masses) |
 //! | `kelvin-voigt`, `tension = false` (default) | F = k δ + c δ̇ | same c | F = k δ + c δ̇ = 0, the force is never tensile (achieved e = 0.674751 for a 0.65 target on two free masses, a closed form checked in `tests/gap_laws.rs`) |
-//! | `hertz-damp` | F = k_h δ^{3/2} (1 + ξ̄ δ̇/δ̇⁻), clamped at 0 | ξ̄ = 8(1−e)/(5e) (Muthukumar & DesRoches 2006 with Ye et al. 2009); δ̇⁻ the approach speed at closure | δ = 0 (achieved e ≈ 0.630 for 0.65, independent of k_h, mass, speed) |
+//! | `hertz-damp` | F = k_h δ^{3/2} (1 + ξ̄ δ̇/δ̇⁻), clamped at 0 | ξ̄ = 8(1−e)/(5e) (Muthukumar & DesRoches 2006 with Ye et al. 2009); δ̇⁻ the approach speed at closure | δ = 0 (achieved e the root of ξ̄(1 + e) + ln((1 − ξ̄e)/(1 + ξ̄)) = 0: 0.630 for 0.65, independent of k_h, mass, speed) |
 //!
 //! k is `gap_element.stiffness` (N/m; N/m^{3/2} for `hertz-damp`).
 //!
