@@ -8,6 +8,8 @@
 //! c_r = 1 (the linear law is elastic), over the first 12 s of the record (the first
 //! impacts and the strongest shaking of CAP000), at 10 and 5 cm.
 
+mod common;
+use common::log_log_slope;
 use solvers::{gap, momentum, RunOutput};
 use structure::testing::paper_scene_aligned as paper_aligned;
 
@@ -34,19 +36,6 @@ fn difference(a: &RunOutput, reference: &RunOutput) -> f64 {
         }
     }
     worst
-}
-
-/// Least-squares slope of ln y against ln x.
-fn log_log_slope(x: &[f64], y: &[f64]) -> f64 {
-    let lx: Vec<f64> = x.iter().map(|v| v.ln()).collect();
-    let ly: Vec<f64> = y.iter().map(|v| v.ln()).collect();
-    let n = lx.len() as f64;
-    let (mx, my) = (lx.iter().sum::<f64>() / n, ly.iter().sum::<f64>() / n);
-    lx.iter()
-        .zip(&ly)
-        .map(|(a, b)| (a - mx) * (b - my))
-        .sum::<f64>()
-        / lx.iter().map(|a| (a - mx).powi(2)).sum::<f64>()
 }
 
 #[test]

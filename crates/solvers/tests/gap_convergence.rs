@@ -1,6 +1,8 @@
 //! Convergence of the gap-element integrators: adaptive in its tolerance, Newmark in its
 //! step, both against a tight adaptive reference.
 
+mod common;
+use common::log_log_slope;
 use solvers::{gap, History, RunOutput};
 use structure::scene::{ContactLaw, Integrator};
 use structure::testing::paper_scene as paper;
@@ -14,17 +16,6 @@ fn shear_error(a: &RunOutput, reference: &RunOutput) -> f64 {
         }
     }
     e
-}
-
-/// Least-squares slope of log y against log x.
-fn slope(x: &[f64], y: &[f64]) -> f64 {
-    let lx: Vec<f64> = x.iter().map(|v| v.ln()).collect();
-    let ly: Vec<f64> = y.iter().map(|v| v.ln()).collect();
-    let n = lx.len() as f64;
-    let (mx, my) = (lx.iter().sum::<f64>() / n, ly.iter().sum::<f64>() / n);
-    let num: f64 = lx.iter().zip(&ly).map(|(a, b)| (a - mx) * (b - my)).sum();
-    let den: f64 = lx.iter().map(|a| (a - mx).powi(2)).sum();
-    num / den
 }
 
 #[test]
@@ -61,7 +52,7 @@ fn tighter_tolerance_gives_smaller_error_on_the_paper_scene_at_k_1e10() {
     // Tolerance proportionality from 1e-6 to 1e-10 (the error control's promise; above
     // 1e-6 the record points limit the step): a fitted slope of one, within [0.8, 1.25]
     // (measured 0.96), and at 1e-10 an error within 10 × tol (measured 1.5e-10).
-    let p = slope(&[1e-6, 1e-7, 1e-8, 1e-9, 1e-10], &errs[3..]);
+    let p = log_log_slope(&[1e-6, 1e-7, 1e-8, 1e-9, 1e-10], &errs[3..]);
     assert!((0.8..=1.25).contains(&p), "slope {p} ({errs:?})");
     assert!(errs[errs.len() - 1] < 1e-9, "{errs:?}");
 }
@@ -141,14 +132,14 @@ fn newmark_converges_to_the_adaptive_answer_at_second_order() {
         dts.push(dt);
         errs.push(e);
     }
-    let ps = slope(&dts, &shear_errs);
+    let ps = log_log_slope(&dts, &shear_errs);
     eprintln!("peak story shears: observed order {ps:.3}");
     assert!(
         (1.7..=2.4).contains(&ps),
         "order {ps}, errors {shear_errs:?}"
     );
     assert!(shear_errs[3] < 5e-5, "peak story shears {shear_errs:?}");
-    let p = slope(&dts, &errs);
+    let p = log_log_slope(&dts, &errs);
     eprintln!("observed order {p:.3}");
     assert!((1.7..=2.4).contains(&p), "order {p}, errors {errs:?}");
     // At the finest step (Δt = 0.3125 ms) the relative displacement error is measured
@@ -190,7 +181,7 @@ fn adaptive_error_on_two_oscillators_shrinks_with_the_tolerance() {
         assert!(w[1] < w[0], "{errs:?}");
     }
     // Tolerance proportionality: a fitted slope of one, within [0.8, 1.25] (measured 0.91).
-    let p = slope(&tols, &errs);
+    let p = log_log_slope(&tols, &errs);
     assert!(
         (0.8..=1.25).contains(&p),
         "error should follow the tolerance, slope {p} ({errs:?})"

@@ -9,6 +9,8 @@
 //!   spring ∝ v √(m/k));
 //! - with `floors = "aligned"` every facing pair has a contact: nothing to audit.
 
+mod common;
+use common::log_log_slope;
 use solvers::{gap, momentum, History, Overlap, RunOutput};
 use structure::testing::{paper_scene as paper, paper_scene_aligned as paper_aligned, refined};
 
@@ -129,15 +131,7 @@ fn paper_scene_roof_only_overlaps_at_mid_height_and_the_gap_element_converges_to
     // [−0.60, −0.40], which refuses k^-1/3, k^-2/3 and k^-1. Measured −0.534 (0.066 inside
     // the band); the two-point ratio from 1e12 to 1e14 it replaces (12.6) only allowed a
     // band of [4, 25] (slopes 0.3–0.7).
-    let lx: Vec<f64> = ks.iter().map(|k| k.ln()).collect();
-    let ly: Vec<f64> = errs.iter().map(|e| e.ln()).collect();
-    let (mx, my) = (lx.iter().sum::<f64>() / 4.0, ly.iter().sum::<f64>() / 4.0);
-    let slope = lx
-        .iter()
-        .zip(&ly)
-        .map(|(a, b)| (a - mx) * (b - my))
-        .sum::<f64>()
-        / lx.iter().map(|a| (a - mx).powi(2)).sum::<f64>();
+    let slope = log_log_slope(&ks, &errs);
     assert!(
         (-0.60..=-0.40).contains(&slope),
         "slope {slope:.3} over k = {ks:?} (errors {errs:?}), not the k^-1/2 rate"

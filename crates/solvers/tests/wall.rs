@@ -7,6 +7,8 @@
 //! = A cos(ωτ − φ), A = √(g² + (c_rⁿv₁/ω)²), returns to u = g after
 //! τₙ = (2π − 2 acos(g/A))/ω with approach speed c_rⁿ v₁ (energy).
 
+mod common;
+use common::log_log_slope;
 use solvers::{gap, momentum, RunOutput};
 use structure::scene::{ContactLaw, ImpulseVariant, Integrator};
 use structure::testing::free_scene;
@@ -95,17 +97,6 @@ fn gap_run(cr: f64, law: ContactLaw, k: f64, duration: f64) -> RunOutput {
     gap::solve(&scene, None).unwrap()
 }
 
-/// Least-squares slope of log y against log x.
-fn slope(x: &[f64], y: &[f64]) -> f64 {
-    let lx: Vec<f64> = x.iter().map(|v| v.ln()).collect();
-    let ly: Vec<f64> = y.iter().map(|v| v.ln()).collect();
-    let n = lx.len() as f64;
-    let (mx, my) = (lx.iter().sum::<f64>() / n, ly.iter().sum::<f64>() / n);
-    let num: f64 = lx.iter().zip(&ly).map(|(a, b)| (a - mx) * (b - my)).sum();
-    let den: f64 = lx.iter().map(|a| (a - mx).powi(2)).sum();
-    num / den
-}
-
 #[test]
 fn gap_element_against_a_wall_converges_to_the_momentum_answer() {
     // Linear law, c_r = 1: in contact m ü = −K u − k (u − g), so the episode lasts
@@ -144,7 +135,7 @@ fn gap_element_against_a_wall_converges_to_the_momentum_answer() {
         );
         errs.push(second.time - t2);
     }
-    let order = slope(&ks, &errs);
+    let order = log_log_slope(&ks, &errs);
     eprintln!("gap element second-impact delay {errs:?} s, order {order}");
     assert!(
         (-0.55..=-0.45).contains(&order),
@@ -174,7 +165,7 @@ fn kelvin_voigt_against_a_wall_rebounds_at_c_r() {
         assert!((first.time - t1).abs() < 1e-9, "{first:?}");
         errs.push((first.achieved_restitution - 0.65).abs());
     }
-    let order = slope(&ks, &errs);
+    let order = log_log_slope(&ks, &errs);
     eprintln!("Kelvin-Voigt restitution errors {errs:?}, order {order}");
     assert!(
         errs[2] < 1e-3 && (-0.55..=-0.45).contains(&order),
