@@ -952,16 +952,10 @@ fn validate(
                     ));
                 }
                 let (r_lo, r_hi) = TOP_STIFFNESS_RATIO_RANGE;
-                if !(r.is_finite() && r > 0.0) {
-                    return Err(invalid(
-                        key("top_stiffness_ratio"),
-                        format!("{r}: expected a finite ratio > 0 (top story stiffness / ground story stiffness), in [{r_lo:e}, {r_hi:e}]"),
-                    ));
-                }
                 if !(r_lo..=r_hi).contains(&r) {
                     return Err(invalid(
                         key("top_stiffness_ratio"),
-                        format!("{r:e}: expected a ratio of the top to the ground story stiffness in [{r_lo:e}, {r_hi:e}]"),
+                        format!("{r:e}: expected a ratio > 0 of the top to the ground story stiffness, in [{r_lo:e}, {r_hi:e}]"),
                     ));
                 }
                 let c = calibrate_first_frequency(
@@ -1018,75 +1012,66 @@ fn validate(
                 ),
             ));
         }
-        if let Some((i, k)) = stiffness
+        // A story stiffness refused (`value`: k as the message shows it; `expected`), under
+        // the key as written:
+        // `story_stiffness[i]`, `story_stiffness` for one number for every story,
+        // `target_frequencies_hz` for a calibrated building.
+        let stiffness_error = |i: usize, value: String, expected: String| {
+            match &calibrated {
+            Some(_) => invalid(
+                key("target_frequencies_hz"),
+                format!(
+                    "the calibration (`{}`) gives story {} a stiffness of {value} N/m: expected {expected}",
+                    if rb.top_stiffness_ratio.is_some() {
+                        "target_frequencies_hz` with `top_stiffness_ratio"
+                    } else {
+                        "target_frequencies_hz"
+                    },
+                    i + 1
+                ),
+            ),
+            None => invalid(
+                if stiffness_scalar {
+                    key("story_stiffness")
+                } else {
+                    format!("buildings[{bi}].story_stiffness[{i}]")
+                },
+                format!("{value}: expected {expected}"),
+            ),
+        }
+        };
+        if let Some((i, &k)) = stiffness
             .iter()
             .enumerate()
             .find(|(_, k)| !(k.is_finite() && **k > 0.0))
         {
-            // The key as written: `story_stiffness[i]`, `story_stiffness` for one number for
-            // every story, `target_frequencies_hz` for a calibrated building.
-            return Err(match &calibrated {
-                Some(_) => invalid(
-                    key("target_frequencies_hz"),
-                    format!(
-                        "the calibration gives story {} a stiffness of {k} N/m: expected a \
-                         finite stiffness > 0",
-                        i + 1
-                    ),
-                ),
-                None => invalid(
-                    if stiffness_scalar {
-                        key("story_stiffness")
-                    } else {
-                        format!("buildings[{bi}].story_stiffness[{i}]")
-                    },
-                    format!("{k}: expected a finite stiffness > 0 (N/m)"),
-                ),
-            });
+            return Err(stiffness_error(
+                i,
+                format!("{k}"),
+                "a finite stiffness > 0 (N/m)".into(),
+            ));
         }
-        // Absolute range and spread of the stiffnesses (and masses): errors name the key the
-        // stiffnesses came from (a calibration's `target_frequencies_hz`).
-        let calibration_key = || {
-            if rb.top_stiffness_ratio.is_some() {
-                "target_frequencies_hz` with `top_stiffness_ratio"
-            } else {
-                "target_frequencies_hz"
-            }
-        };
         let (k_lo, k_hi) = STIFFNESS_RANGE;
-        if let Some((i, k)) = stiffness
+        if let Some((i, &k)) = stiffness
             .iter()
             .enumerate()
             .find(|(_, k)| !(k_lo..=k_hi).contains(*k))
         {
-            return Err(match &calibrated {
-                Some(_) => invalid(
-                    key("target_frequencies_hz"),
-                    format!(
-                        "the calibration (`{}`) gives story {} a stiffness of {k:e} N/m: expected \
-                         story stiffnesses in [{k_lo:e}, {k_hi:e}] N/m; lower the frequencies \
-                         or the masses",
-                        calibration_key(),
-                        i + 1
-                    ),
-                ),
-                None => invalid(
-                    if stiffness_scalar {
-                        key("story_stiffness")
+            return Err(stiffness_error(
+                i,
+                format!("{k:e}"),
+                format!(
+                    "story stiffnesses in [{k_lo:e}, {k_hi:e}] N/m{}",
+                    if calibrated.is_some() {
+                        "; lower the frequencies or the masses"
                     } else {
-                        format!("buildings[{bi}].story_stiffness[{i}]")
-                    },
-                    format!("{k:e}: expected a story stiffness in [{k_lo:e}, {k_hi:e}] N/m"),
+                        ""
+                    }
                 ),
-            });
+            ));
         }
-        let span = |v: &[f64]| {
-            v.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), x| {
-                (lo.min(*x), hi.max(*x))
-            })
-        };
-        let (k_min, k_max) = span(&stiffness);
-        let (m_min, m_max) = span(&masses);
+        let (k_min, k_max) = crate::model::min_max(&stiffness);
+        let (m_min, m_max) = crate::model::min_max(&masses);
         let (k_ratio, m_ratio) = (k_max / k_min, m_max / m_min);
         let spread = k_ratio * m_ratio * (n * n) as f64;
         if spread > MAX_SPREAD {

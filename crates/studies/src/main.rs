@@ -810,11 +810,12 @@ fn studies_command(command: StudiesCommand) -> Result<()> {
             // Every study's definition and case list first (0.3 s for all of them, one run),
             // so that a bad definition of a later study stops the command before any study
             // has written its outputs.
-            for n in &names {
-                st::check_study(n, &cfg).map_err(|e| bad(n, e))?;
-            }
-            for n in &names {
-                let r = st::run_study(n, &cfg).map_err(|e| bad(n, e))?;
+            let prepared = names
+                .iter()
+                .map(|n| st::prepare_study(n, &cfg).map_err(|e| bad(n, e)))
+                .collect::<Result<Vec<_>>>()?;
+            for (n, p) in names.iter().zip(prepared) {
+                let r = st::run_prepared(p, &cfg).map_err(|e| bad(n, e))?;
                 // Failures the study exists to show (e.g. chattering without the persistent
                 // contact phase) are results; say so, so they do not read as errors.
                 let failed = match (r.summary.failed, r.unexpected.len()) {

@@ -21,6 +21,7 @@
 //! the history. Its answer is the response without contact (with its peaks sampled at the
 //! steps), not the solver's: it is a floor, not a solver. Only for scenes of buildings of
 //! at most 16 floors with every mode kept and one contact (the paper scene).
+use solvers::momentum::modal::{self, StepBlock};
 use solvers::momentum::Problem;
 
 /// Steps per block.
@@ -31,9 +32,8 @@ const PF: usize = 16;
 
 /// The problem's data in the floor's layout (per building, padded to 16 modes and floors).
 pub struct Layout {
-    /// Per building, per mode lane (PM), the step coefficients a00 a01 a10 a11 b00 b01 b10 b11 Γ
-    /// and the work coefficients (ew 4, ed 7).
-    coef: Vec<[[f64; PM]; 20]>,
+    /// Per building, its modes' step coefficients in PM lanes (the solver's [`StepBlock`]).
+    coef: Vec<StepBlock<PM>>,
     /// Per building Φ: mode m's floors at [m][0..PF] (zeros past the last floor or mode).
     phi: Vec<[[f64; PF]; PM]>,
     /// Per building the story stiffness per floor (zeros past the last floor).
@@ -58,35 +58,7 @@ pub fn layout(p: &Problem, scene: &structure::Scene) -> Layout {
             r.len() <= PM && bm.n_floors <= PF,
             "the floor takes buildings of at most {PF} floors and {PM} modes"
         );
-        let fields: [&[f64]; 20] = [
-            &c.a00,
-            &c.a01,
-            &c.a10,
-            &c.a11,
-            &c.b00,
-            &c.b01,
-            &c.b10,
-            &c.b11,
-            &p.modal.gamma,
-            &c.ew[0],
-            &c.ew[1],
-            &c.ew[2],
-            &c.ew[3],
-            &c.ed[0],
-            &c.ed[1],
-            &c.ed[2],
-            &c.ed[3],
-            &c.ed[4],
-            &c.ed[5],
-            &c.ed[6],
-        ];
-        let mut cb = [[0.0; PM]; 20];
-        for (f, src) in cb.iter_mut().zip(fields) {
-            for (i, n) in r.clone().enumerate() {
-                f[i] = src[n];
-            }
-        }
-        coef.push(cb);
+        coef.push(StepBlock::gather(c, &p.modal.gamma, r.start, r.len()));
         let mut ph = [[0.0; PF]; PM];
         for (m, row) in ph.iter_mut().enumerate().take(r.len()) {
             for (i, x) in row.iter_mut().enumerate().take(bm.n_floors) {
@@ -125,32 +97,20 @@ pub struct Counts {
     pub work: f64,
 }
 
-/// One block's propagation of building `b` from (x, v): q, q̇ of each step into qs, vs.
+/// One block's propagation of a building from (x, v) by the solver's own kernel
+/// ([`modal::propagate`]): q, q̇ of each step into qs, vs, the works summed per mode.
 #[inline(always)]
 fn propagate(
-    c: &[[f64; PM]; 20],
+    c: &StepBlock<PM>,
     (x, v): (&mut [f64; PM], &mut [f64; PM]),
     ag: (&[f64], &[f64]),
     (qs, vs): (&mut [[f64; PM]], &mut [[f64; PM]]),
     work: &mut [f64; PM],
 ) {
     for (t, (&a0, &a1)) in ag.0.iter().zip(ag.1).enumerate() {
-        let mut xn = [0.0; PM];
-        let mut vn = [0.0; PM];
+        let [xn, vn, input, damping] = modal::propagate::<PM>(c, *x, *v, a0, a1);
         for n in 0..PM {
-            let f0 = -c[8][n] * a0;
-            let f1 = -c[8][n] * a1;
-            let (x0, v0) = (x[n], v[n]);
-            xn[n] = c[0][n] * x0 + c[1][n] * v0 + c[4][n] * f0 + c[5][n] * f1;
-            vn[n] = c[2][n] * x0 + c[3][n] * v0 + c[6][n] * f0 + c[7][n] * f1;
-            let wx = c[10][n].mul_add(a1, c[9][n] * a0);
-            let wv = c[12][n].mul_add(a1, c[11][n] * a0);
-            let dx = c[17][n].mul_add(
-                a1,
-                c[16][n].mul_add(a0, c[14][n].mul_add(v0, c[13][n] * x0)),
-            );
-            let dv = c[19][n].mul_add(a1, c[18][n].mul_add(a0, c[15][n] * v0));
-            work[n] += x0.mul_add(wx, v0 * wv) + x0.mul_add(dx, v0 * dv);
+            work[n] += input[n] + damping[n];
         }
         *x = xn;
         *v = vn;

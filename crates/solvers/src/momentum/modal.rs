@@ -333,7 +333,7 @@ pub struct StepBlock<const W: usize> {
 
 impl<const W: usize> StepBlock<W> {
     /// Modes `first` … `first + count − 1` (count ≤ W; the other lanes zero).
-    fn gather(c: &StepCoeffs, gamma: &[f64], first: usize, count: usize) -> Self {
+    pub fn gather(c: &StepCoeffs, gamma: &[f64], first: usize, count: usize) -> Self {
         let fields: [&[f64]; 9] = [
             &c.a00, &c.a01, &c.a10, &c.a11, &c.b00, &c.b01, &c.b10, &c.b11, gamma,
         ];

@@ -706,11 +706,11 @@ impl GroundMotion {
         // by more than that tolerance (a step the file shows); failing that (steps within
         // the tolerance of the first one, but not of the mean), by the first step off the mean.
         let tol = 1e-6 * dt;
-        let off_mean = |w: &&[(f64, usize)]| ((w[1].0 - w[0].0) - dt).abs() > tol;
-        if times.windows(2).any(|w| off_mean(&w)) {
+        let off =
+            |reference: f64| move |w: &&[(f64, usize)]| ((w[1].0 - w[0].0) - reference).abs() > tol;
+        if let Some(w_mean) = times.windows(2).find(off(dt)) {
             let first = times[1].0 - times[0].0;
-            let off_first = |w: &&[(f64, usize)]| ((w[1].0 - w[0].0) - first).abs() > tol;
-            let (w, reference, expected_dt) = match times.windows(2).find(off_first) {
+            let (w, reference, expected_dt) = match times.windows(2).find(off(first)) {
                 Some(w) => (
                     w,
                     format!(
@@ -719,11 +719,7 @@ impl GroundMotion {
                     ),
                     first,
                 ),
-                None => (
-                    times.windows(2).find(off_mean).unwrap_or(&times[..2]),
-                    "the mean step".to_string(),
-                    dt,
-                ),
+                None => (w_mean, "the mean step".to_string(), dt),
             };
             return Err(RecordError::NonUniform {
                 origin: origin.to_string(),

@@ -24,6 +24,14 @@ pub use calibrate::{
 pub use modes::Modes;
 pub use story_law::{Bilinear, BilinearParams, BilinearState, StoryLaw};
 
+/// The smallest and the largest of `v` ((∞, 0) when empty): the spreads of a building's masses
+/// and stiffnesses, which bound how well its eigenproblem is conditioned.
+pub(crate) fn min_max(v: &[f64]) -> (f64, f64) {
+    v.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), x| {
+        (lo.min(*x), hi.max(*x))
+    })
+}
+
 /// Errors raised while building or analysing a model.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ModelError {

@@ -53,13 +53,8 @@ impl Modes {
                 // A valid building's K is positive definite (every story stiffness > 0): a
                 // non-positive eigenvalue is round-off swamping the smallest ones, i.e. an
                 // ill-conditioned problem. Say what was found and the spreads behind it.
-                let span = |v: &[f64]| {
-                    v.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), x| {
-                        (lo.min(*x), hi.max(*x))
-                    })
-                };
-                let (k_lo, k_hi) = span(&b.story_stiffness);
-                let (m_lo, m_hi) = span(&b.masses);
+                let (k_lo, k_hi) = super::min_max(&b.story_stiffness);
+                let (m_lo, m_hi) = super::min_max(&b.masses);
                 let l_max = (0..n).map(|i| lam[i]).fold(f64::NAN, f64::max);
                 return Err(ModelError::Eigen {
                     building: b.name.clone(),

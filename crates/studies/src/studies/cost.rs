@@ -19,9 +19,8 @@ use solvers::Method;
 
 use super::stats::percentile;
 use super::{
-    default_pga, failures_note, is_gap, is_positive, record_label, require, require_count,
-    require_list, require_mode_counts, require_pga, shear_error, write_summary, Ctx, Study,
-    MAX_REPEAT,
+    default_pga, failures_note, is_positive, record_label, require_count, require_list,
+    require_mode_counts, require_pga, shear_error, write_summary, Ctx, Study, MAX_REPEAT,
 };
 use crate::plot::{figure, Marker, Panel, PanelKind, Series, VLine};
 use crate::sweep::{CaseOutputs, CaseResult, CaseSpec, Result, Results};
@@ -72,9 +71,7 @@ struct Def {
 /// before any case is built.
 fn validate(ctx: &Ctx, d: &Def) -> Result<()> {
     require_pga(ctx, d.pga)?;
-    require(ctx, is_gap(d.gap), || {
-        format!("`gap` = {:?}: expected a finite gap >= 0 (m)", d.gap)
-    })?;
+    super::require_gap(ctx, d.gap)?;
     require_mode_counts(ctx, "modes", &d.modes, false)?;
     for (key, v) in [
         ("adaptive_stiffness", &d.adaptive_stiffness),
@@ -82,9 +79,7 @@ fn validate(ctx: &Ctx, d: &Def) -> Result<()> {
         ("newmark_step", &d.newmark_step),
         ("newmark_stiffness", &d.newmark_stiffness),
     ] {
-        require(ctx, !v.is_empty(), || {
-            format!("`{key}` = []: expected at least one value")
-        })?;
+        super::require_nonempty(ctx, key, v)?;
     }
     require_count(ctx, "repeat", d.repeat, 1..=MAX_REPEAT, "run")?;
     require_list(

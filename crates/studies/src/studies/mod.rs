@@ -192,9 +192,12 @@ pub fn require_mode_counts(ctx: &Ctx, key: &str, v: &[usize], may_be_empty: bool
     let ok = (may_be_empty || !v.is_empty()) && v.iter().all(|n| (1..=MAX_MODES).contains(n));
     require(ctx, ok, || {
         format!(
-            "`{key}` = {v:?}: expected {} mode count{}, each in 1 ..= {MAX_MODES}",
-            if may_be_empty { "" } else { "at least one" },
-            if may_be_empty { "s" } else { "" }
+            "`{key}` = {v:?}: expected {}, each in 1 ..= {MAX_MODES}",
+            if may_be_empty {
+                "mode counts"
+            } else {
+                "at least one mode count"
+            }
         )
     })
 }
@@ -226,6 +229,21 @@ pub fn is_restitution(x: f64) -> bool {
 /// A finite number > 0.
 pub fn is_positive(x: f64) -> bool {
     x.is_finite() && x > 0.0
+}
+
+/// The gap of contact 0 (m, key `gap`) of a study: finite and >= 0.
+pub fn require_gap(ctx: &Ctx, gap: f64) -> Result<()> {
+    require(ctx, is_gap(gap), || {
+        format!("`gap` = {gap:?}: expected a finite gap >= 0 (m)")
+    })
+}
+
+/// A list `key` of values the scene checks in every case (stiffnesses, tolerances, steps):
+/// at least one.
+pub fn require_nonempty(ctx: &Ctx, key: &str, v: &[f64]) -> Result<()> {
+    require(ctx, !v.is_empty(), || {
+        format!("`{key}` = []: expected at least one value")
+    })
 }
 
 /// The analysis PGA `pga` (g, key `pga`) of a study: finite and > 0.
@@ -518,13 +536,31 @@ fn read_definition(cfg: &RunConfig, name: &str) -> Result<(String, String)> {
     Ok((text, path.display().to_string()))
 }
 
-/// Runs one study (all its missing cases, or a shard of them) and, unless sharded, writes
-/// its tables, figures and summary.
-/// A study ready to run: the study, its definition's text, its context and its full case
-/// list, built and checked without writing anything.
-type Prepared = (&'static dyn Study, String, Ctx, Vec<CaseSpec>);
+/// A study ready to run ([`prepare_study`]): its definition read and checked and its full
+/// case list built, nothing written yet.
+pub struct PreparedStudy {
+    name: String,
+    st: &'static dyn Study,
+    text: String,
+    ctx: Ctx,
+    specs: Vec<CaseSpec>,
+    /// Time the preparation took, s (counted in the study's wall time).
+    seconds: f64,
+}
 
-fn prepare(name: &str, cfg: &RunConfig) -> Result<Prepared> {
+impl PreparedStudy {
+    /// Cases of the study (with their baselines).
+    pub fn cases(&self) -> usize {
+        self.specs.len()
+    }
+}
+
+/// Reads and checks a study's definition and builds its case list, writing nothing: all that
+/// [`run_study`] does before its first write. `pound studies run` prepares every study it is
+/// given before running the first, so that a bad definition of a later study stops the
+/// command before any study has written its outputs.
+pub fn prepare_study(name: &str, cfg: &RunConfig) -> Result<PreparedStudy> {
+    let t0 = Instant::now();
     let st = study(name).ok_or_else(|| {
         StudyError::Other(format!(
             "unknown study `{name}` (studies: {}, {})",
@@ -535,24 +571,37 @@ fn prepare(name: &str, cfg: &RunConfig) -> Result<Prepared> {
     let (text, file) = read_definition(cfg, name)?;
     let ctx = make_ctx(name, &text, &file, cfg, &cfg.opts)?;
     let specs = all_cases(st, &ctx)?;
-    Ok((st, text, ctx, specs))
+    Ok(PreparedStudy {
+        name: name.into(),
+        st,
+        text,
+        ctx,
+        specs,
+        seconds: t0.elapsed().as_secs_f64(),
+    })
 }
 
-/// Checks a study's definition and builds its case list, writing nothing: all that
-/// [`run_study`] does before its first write. Returns the number of cases. `pound studies
-/// run` checks every study it is given this way before running the first, so that a bad
-/// definition of a later study stops the command before any study has written its outputs.
-pub fn check_study(name: &str, cfg: &RunConfig) -> Result<usize> {
-    Ok(prepare(name, cfg)?.3.len())
-}
-
+/// Runs one study (all its missing cases, or a shard of them) and, unless sharded, writes
+/// its tables, figures and summary.
 pub fn run_study(name: &str, cfg: &RunConfig) -> Result<StudyRun> {
+    run_prepared(prepare_study(name, cfg)?, cfg)
+}
+
+/// [`run_study`] of a study prepared with the same `cfg`.
+pub fn run_prepared(p: PreparedStudy, cfg: &RunConfig) -> Result<StudyRun> {
     let t0 = Instant::now();
-    let (st, text, ctx, specs) = prepare(name, cfg)?;
+    let PreparedStudy {
+        name,
+        st,
+        text,
+        ctx,
+        specs,
+        seconds,
+    } = p;
     write_json(
         &ctx.dir.join("manifest.json"),
         &Manifest {
-            study: name.into(),
+            study: name.clone(),
             definition: text,
             options: cfg.opts.clone(),
             ids: specs.iter().map(|s| s.id.clone()).collect(),
@@ -576,10 +625,10 @@ pub fn run_study(name: &str, cfg: &RunConfig) -> Result<StudyRun> {
         Vec::new()
     };
     Ok(StudyRun {
-        name: name.into(),
+        name,
         summary,
         reported,
-        wall_seconds: t0.elapsed().as_secs_f64(),
+        wall_seconds: seconds + t0.elapsed().as_secs_f64(),
         unexpected,
     })
 }

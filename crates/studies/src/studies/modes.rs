@@ -11,9 +11,8 @@ use solvers::Method;
 use super::record_table::PulseClass;
 use super::stats::{median_band, Spread};
 use super::{
-    amp_contact, default_pga, default_record_table, failures_note, is_gap, is_restitution,
-    record_classes, record_name, require_count, require_pga, study_records, write_summary, Ctx,
-    Study, MAX_MODES,
+    amp_contact, default_pga, default_record_table, failures_note, is_restitution, record_classes,
+    record_name, require_count, require_pga, study_records, write_summary, Ctx, Study, MAX_MODES,
 };
 use crate::plot::{figure, Marker, Panel, PanelKind, Series};
 use crate::sweep::{CaseSpec, Result, Results};
@@ -76,9 +75,7 @@ impl Study for Modes {
     fn cases(&self, ctx: &Ctx) -> Result<Vec<CaseSpec>> {
         let d: Def = ctx.def()?;
         require_pga(ctx, d.pga)?;
-        super::require(ctx, is_gap(d.gap), || {
-            format!("`gap` = {:?}: expected a finite gap >= 0 (m)", d.gap)
-        })?;
+        super::require_gap(ctx, d.gap)?;
         super::require(ctx, is_restitution(d.restitution), || {
             format!(
                 "`restitution` = {:?}: expected a coefficient of restitution in [0, 1]",

@@ -10,8 +10,8 @@ use solvers::Method;
 
 use super::stats::{median_band, Spread};
 use super::{
-    amp_contact, default_pga, default_record_table, failures_note, is_gap, record_classes,
-    require_pga, study_records, write_summary, Ctx, Study,
+    amp_contact, default_pga, default_record_table, failures_note, record_classes, require_pga,
+    study_records, write_summary, Ctx, Study,
 };
 use crate::plot::{figure, Panel, PanelKind, Series};
 use crate::sweep::{CaseSpec, Result, Results};
@@ -95,9 +95,7 @@ impl Study for Restitution {
             },
         )?;
         require_pga(ctx, d.pga)?;
-        super::require(ctx, is_gap(d.gap), || {
-            format!("`gap` = {:?}: expected a finite gap >= 0 (m)", d.gap)
-        })?;
+        super::require_gap(ctx, d.gap)?;
         super::require(ctx, !d.gap_stiffness.is_empty(), || {
             "`gap_stiffness` = []: expected at least one gap-element stiffness (N/m)".into()
         })?;

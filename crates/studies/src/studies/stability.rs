@@ -10,8 +10,8 @@ use serde::Deserialize;
 use solvers::Method;
 
 use super::{
-    default_pga, failures_note, is_gap, is_restitution, logspace, record_label, require,
-    require_count, require_list, require_pga, write_summary, Ctx, Study, MAX_GRID, MAX_MODES,
+    default_pga, failures_note, is_restitution, logspace, record_label, require_count,
+    require_list, require_pga, write_summary, Ctx, Study, MAX_GRID, MAX_MODES,
 };
 use crate::plot::{figure, Heat, Marker, Panel, PanelKind, Series};
 use crate::sweep::{CaseSpec, Result, Results};
@@ -54,16 +54,12 @@ struct Def {
 /// before any case is built.
 fn validate(ctx: &Ctx, d: &Def) -> Result<()> {
     require_pga(ctx, d.pga)?;
-    require(ctx, is_gap(d.gap), || {
-        format!("`gap` = {:?}: expected a finite gap >= 0 (m)", d.gap)
-    })?;
+    super::require_gap(ctx, d.gap)?;
     for (key, v) in [
         ("newmark_step", &d.newmark_step),
         ("newmark_stiffness", &d.newmark_stiffness),
     ] {
-        require(ctx, !v.is_empty(), || {
-            format!("`{key}` = []: expected at least one value")
-        })?;
+        super::require_nonempty(ctx, key, v)?;
     }
     require_count(
         ctx,

@@ -19,8 +19,8 @@ use solvers::Method;
 use super::record_table::PulseClass;
 use super::stats::{loglog_slope, median_band, Spread};
 use super::{
-    amp_contact, default_pga, default_record_table, failures_note, is_gap, is_restitution,
-    logspace, record_classes, record_name, require_count, require_pga, shear_error, study_records,
+    amp_contact, default_pga, default_record_table, failures_note, is_restitution, logspace,
+    record_classes, record_name, require_count, require_pga, shear_error, study_records,
     write_summary, Ctx, Study, MAX_GRID,
 };
 use crate::plot::{figure, Panel, PanelKind, Series};
@@ -74,9 +74,7 @@ struct Grid {
 
 fn grid(ctx: &Ctx, d: &Def) -> Result<Grid> {
     require_pga(ctx, d.pga)?;
-    super::require(ctx, is_gap(d.gap), || {
-        format!("`gap` = {:?}: expected a finite gap >= 0 (m)", d.gap)
-    })?;
+    super::require_gap(ctx, d.gap)?;
     require_count(
         ctx,
         "stiffness_count",
