@@ -9,7 +9,8 @@
 //! Impacts change the kinetic energy by exactly ½Σ(q̇⁺² − q̇⁻²) (for `consistent`,
 //! ½(1−e²)v²/W per impact); that loss is `contact`. Persistent-contact forces are constant
 //! per segment and do the work λ·Δδ (zero to round-off, the contact is workless); it is
-//! added to `contact` too. balance_error = initial + input − damping − contact − final
+//! added to `contact` too, as is the potential energy that closing a held gap after a cut
+//! segment changes (`Stepper::close_held_gaps`). balance_error = initial + input − damping − contact − final
 //! therefore measures the integration itself.
 
 use crate::EnergyAudit;

@@ -12,6 +12,11 @@
 //!   otherwise Brent on δ̇ locates the maximum s*, and if δ(s*) ≥ 0 Brent on δ over [0, s*];
 //! - δ₀ ≥ 0 (touching just after an impact or a release): δ̇₀ > 0 with δ₁ ≥ 0 is an
 //!   immediate (zero-speed) closure (with δ₁ < 0 a round-off overlap, ignored); otherwise the minimum is located first and the crossing after it.
+//!
+//! A contact just resolved is searched at δ = `shift` (its round-off band) until its gap
+//! has opened beyond −`shift`; where it opens that far and closes again within one window,
+//! it is re-armed at the minimum and the closure is the crossing of δ = 0 after it (not of
+//! δ = `shift`, which would be late by shift/δ̇).
 
 use roots::{Convergency, SearchError};
 
@@ -197,6 +202,16 @@ impl Locator<'_> {
     /// are δ, δ̇ at lo and hi.
     pub fn locate(&mut self, d0: f64, dd0: f64, d1: f64, dd1: f64) -> Option<f64> {
         let (lo, tau) = (self.lo, self.hi);
+        if self.shift > 0.0 && dd0 < 0.0 && dd1 > 0.0 && d1 + self.shift >= 0.0 {
+            // A contact not yet re-armed (searched at δ = shift) that falls and rises again
+            // within the window to δ ≥ 0: if its gap opened beyond −shift at the minimum, it
+            // is re-armed there and the closure is the crossing of δ = 0 after it.
+            let s_min = self.brent(lo, tau, true);
+            if self.delta(s_min) + self.shift < -self.shift {
+                self.shift = 0.0;
+                return Some(self.brent(s_min, tau, false));
+            }
+        }
         if d0 >= 0.0 {
             if dd0 > 0.0 {
                 // Touching and approaching: a real closure only if δ is still ≥ 0 at the

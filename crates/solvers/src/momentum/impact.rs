@@ -257,6 +257,31 @@ impl Stepper<'_> {
         self.refresh_rates();
         Ok(())
     }
+
+    /// Closes the held gaps where one has left its round-off band: a held segment cut by
+    /// another contact's closure (the forces close the gaps at the segment's planned end
+    /// only, [`Stepper::persistent_segment`]). The least modal displacement that closes them,
+    /// Δq = −Gᵀ W⁻¹ δ, as the impulse method does after every step; the potential energy it
+    /// changes goes to the contact account. Within the band nothing moves (a segment that
+    /// reached its planned end).
+    pub(super) fn close_held_gaps(&mut self, set: &[usize]) -> Result<(), SolverError> {
+        let p = self.p;
+        let d: Vec<f64> = set
+            .iter()
+            .map(|&c| p.contacts[c].delta(&self.s.x))
+            .collect();
+        if set.iter().zip(&d).all(|(&c, d)| d.abs() <= self.pen[c]) {
+            return Ok(());
+        }
+        let dx = impulse::solve_delassus(&p.contacts, set, d, self.s.t, "held gaps")?;
+        let e0 = p.modal.energy(&self.s.x, &self.s.v);
+        let pairs: Vec<(usize, f64)> = set.iter().copied().zip(dx).collect();
+        impulse::apply(&p.contacts, &pairs, &mut self.s.x);
+        self.energy.contact += e0 - p.modal.energy(&self.s.x, &self.s.v);
+        self.diag.gap_projections += 1;
+        self.refresh_values();
+        Ok(())
+    }
 }
 
 /// Why the restitution of a rigid impact is not reported, if it is not: a touching contact

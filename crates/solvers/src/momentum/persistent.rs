@@ -19,7 +19,11 @@
 //! method on the held trajectory, the phase ends there, and the contact is released with
 //! δ̇ = 0. At every held-segment end the relative velocity of the held contacts is projected
 //! to zero (a plastic micro-impulse whose energy goes to the contact account), so that a
-//! release leaves the floors touching at rest, not drifting together.
+//! release leaves the floors touching at rest, not drifting together. A segment cut short by
+//! another contact's closure leaves the held gaps open (the forces close them at the planned
+//! end only): they are closed by the least modal displacement
+//! ([`Stepper::close_held_gaps`]), and a held phase that did work on the buildings stops the
+//! run ([`Stepper::check_contact_account`]).
 
 use super::impulse::{self, solve_checked, ContactGeom};
 use super::modal::{Arc, Modal};
@@ -279,6 +283,8 @@ impl Stepper<'_> {
         self.held_force.fill(0.0);
         let step = step?;
         self.project_held(&set)?;
+        self.close_held_gaps(&set)?;
+        self.check_contact_account()?;
         match (step, release) {
             (Step::Reached, Some(c)) => Ok(self.release(c)),
             (step, _) => Ok(step),

@@ -25,6 +25,12 @@ use crate::response::ResponseTracker;
 use crate::rules::ImpactRateGuard;
 use crate::{BuildingResponse, History, Impact, PersistentContact, SolverError, Stats};
 
+/// Relative size of the energy-audit residual (and of a negative contact or damping
+/// account) beyond which a run is stopped as untrustworthy: the method closes its audit to
+/// round-off (1e-13 to 1e-11 of the energy scale on the robustness sweep and the randomized
+/// tests), so 1e-6 is far from any sound run.
+pub const AUDIT_TOLERANCE: f64 = 1e-6;
+
 /// The mutable state: time, modal coordinates, contacts held together.
 #[derive(Debug, Clone)]
 pub struct State {
@@ -68,6 +74,9 @@ pub struct Diagnostics {
     pub building_samples: u64,
     pub building_samples_skipped: u64,
     pub overlap_audits_skipped: u64,
+    /// Held-gap projections beyond the round-off band ([`Stepper::project_held`]): held
+    /// segments cut by another contact's closure.
+    pub gap_projections: u64,
 }
 
 /// Advances the state one segment at a time; owns the accumulated results.
@@ -563,6 +572,15 @@ impl<'a> Stepper<'a> {
         arch.dispatch(Op { st: self })
     }
 
+    /// The displacements changed without a sample (the held gaps closed,
+    /// [`Stepper::close_held_gaps`]): the next interval's values at its start are the new ones.
+    pub(super) fn refresh_values(&mut self) {
+        for (b, bm) in self.p.modal.buildings.iter().enumerate() {
+            let o = self.floors_at(b);
+            bm.to_floors(&self.s.x, &mut self.u_prev[o + 1..o + self.fs + 1]);
+        }
+    }
+
     /// Peak story shears and floor displacements per building.
     pub fn peaks(&self, scene: &Scene) -> Vec<BuildingResponse> {
         scene
@@ -994,79 +1012,7 @@ impl<'a> Stepper<'a> {
         let (a0, a1) = (p.ground(j, self.s.t), p.ground(j, t_end));
         self.begin_interval(a0, a1, tau, fc);
         self.build_arcs(a0, a1, tau, fc);
-        // The state at τ (xn, vn), computed when first needed: a closure located in an
-        // earlier window does not need it.
-        let mut end_ready = false;
-        let tol = 2.0 * f64::EPSILON * (self.s.t + tau) + 1e-300;
-        let mut first: Option<f64> = None;
-        let mut found: Vec<(usize, f64)> = vec![];
-        for (ci, ct) in p.contacts.iter().enumerate() {
-            if self.s.persistent.iter().any(|&(c, _)| c == ci) {
-                continue;
-            }
-            // Windows of at most h/sub: at most one extremum of δ each.
-            let m = ((tau / (p.h / p.sub as f64)) - 1e-9).ceil().max(1.0) as usize;
-            let at = |s: f64, arcs: &[Arc], memo: &mut [TrigMemo]| {
-                let (mut d, mut dd) = (-ct.gap, 0.0);
-                for (n, (g, a)) in ct.g.iter().zip(arcs).enumerate() {
-                    if *g != 0.0 {
-                        let (x, v) = a.xv_from(s, TrigMemo::get(arcs, memo, n, s));
-                        d += g * x;
-                        dd += g * v;
-                    }
-                }
-                (d, dd)
-            };
-            if self.grazing[ci] && ct.delta(&self.s.x) < -self.pen[ci] {
-                self.grazing[ci] = false;
-            }
-            let shift = if self.grazing[ci] { self.pen[ci] } else { 0.0 };
-            let mut prev = (ct.delta(&self.s.x) - shift, ct.dot(&self.s.v));
-            let mut r = None;
-            for w in 1..=m {
-                let (lo, hi) = (
-                    tau * (w - 1) as f64 / m as f64,
-                    if w == m {
-                        tau
-                    } else {
-                        tau * w as f64 / m as f64
-                    },
-                );
-                let cur = if w == m {
-                    if !end_ready {
-                        self.end_state(tau);
-                        end_ready = true;
-                    }
-                    (ct.delta(&self.xn) - shift, ct.dot(&self.vn))
-                } else {
-                    let (d, dd) = at(hi, &self.arcs, &mut self.memo);
-                    (d - shift, dd)
-                };
-                let mut loc = Locator {
-                    contact: ct,
-                    arcs: &self.arcs,
-                    modal: &p.modal,
-                    lo,
-                    hi,
-                    tol,
-                    shift,
-                    iterations: 0,
-                    memo: &mut self.memo,
-                    lanes: &self.lanes,
-                    buf: &mut self.lane_buf,
-                };
-                r = loc.locate(prev.0, prev.1, cur.0, cur.1);
-                self.stats.root_iterations += loc.iterations;
-                if r.is_some() {
-                    break;
-                }
-                prev = cur;
-            }
-            if let Some(s) = r {
-                found.push((ci, s));
-                first = Some(first.map_or(s, |f: f64| f.min(s)));
-            }
-        }
+        let (first, found, end_ready) = self.locate_closures(tau);
         let (s_end, step) = match first {
             None => (tau, Step::Reached),
             Some(s) => {
@@ -1125,6 +1071,96 @@ impl<'a> Stepper<'a> {
         Ok(step)
     }
 
+    /// The first closure over [0, tau] of the contacts not held, on the arcs just built
+    /// ([`Stepper::build_arcs`]) from the current state: its instant (from the segment start),
+    /// every contact found closing with its instant, and whether (xn, vn) hold the state at
+    /// tau. Commits nothing (but re-arms a contact whose gap has opened, as the search does).
+    pub(super) fn locate_closures(&mut self, tau: f64) -> (Option<f64>, Vec<(usize, f64)>, bool) {
+        let p = self.p;
+        // The state at τ (xn, vn), computed when first needed: a closure located in an
+        // earlier window does not need it.
+        let mut end_ready = false;
+        let tol = 2.0 * f64::EPSILON * (self.s.t + tau) + 1e-300;
+        let mut first: Option<f64> = None;
+        let mut found: Vec<(usize, f64)> = vec![];
+        for (ci, ct) in p.contacts.iter().enumerate() {
+            if self.s.persistent.iter().any(|&(c, _)| c == ci) {
+                continue;
+            }
+            // Windows of at most h/sub: at most one extremum of δ each.
+            let m = ((tau / (p.h / p.sub as f64)) - 1e-9).ceil().max(1.0) as usize;
+            let at = |s: f64, arcs: &[Arc], memo: &mut [TrigMemo]| {
+                let (mut d, mut dd) = (-ct.gap, 0.0);
+                for (n, (g, a)) in ct.g.iter().zip(arcs).enumerate() {
+                    if *g != 0.0 {
+                        let (x, v) = a.xv_from(s, TrigMemo::get(arcs, memo, n, s));
+                        d += g * x;
+                        dd += g * v;
+                    }
+                }
+                (d, dd)
+            };
+            if self.grazing[ci] && ct.delta(&self.s.x) < -self.pen[ci] {
+                self.grazing[ci] = false;
+            }
+            // A contact not yet re-armed is searched at δ = pen until its gap opens beyond
+            // −pen: at a window end (the later windows at δ = 0), or inside a window at the
+            // minimum that precedes a new approach (the locator re-arms it there).
+            let mut shift = if self.grazing[ci] { self.pen[ci] } else { 0.0 };
+            let mut prev = (ct.delta(&self.s.x) - shift, ct.dot(&self.s.v));
+            let mut r = None;
+            for w in 1..=m {
+                let (lo, hi) = (
+                    tau * (w - 1) as f64 / m as f64,
+                    if w == m {
+                        tau
+                    } else {
+                        tau * w as f64 / m as f64
+                    },
+                );
+                let cur = if w == m {
+                    if !end_ready {
+                        self.end_state(tau);
+                        end_ready = true;
+                    }
+                    (ct.delta(&self.xn) - shift, ct.dot(&self.vn))
+                } else {
+                    let (d, dd) = at(hi, &self.arcs, &mut self.memo);
+                    (d - shift, dd)
+                };
+                let mut loc = Locator {
+                    contact: ct,
+                    arcs: &self.arcs,
+                    modal: &p.modal,
+                    lo,
+                    hi,
+                    tol,
+                    shift,
+                    iterations: 0,
+                    memo: &mut self.memo,
+                    lanes: &self.lanes,
+                    buf: &mut self.lane_buf,
+                };
+                r = loc.locate(prev.0, prev.1, cur.0, cur.1);
+                self.stats.root_iterations += loc.iterations;
+                if r.is_some() {
+                    break;
+                }
+                prev = cur;
+                if shift > 0.0 && prev.0 + shift < -shift {
+                    // Opened beyond −pen at this window end: re-armed from here on.
+                    prev.0 += shift;
+                    shift = 0.0;
+                }
+            }
+            if let Some(s) = r {
+                found.push((ci, s));
+                first = Some(first.map_or(s, |f: f64| f.min(s)));
+            }
+        }
+        (first, found, end_ready)
+    }
+
     /// Where building `b`'s part of `u`, `ud`, `u_prev` and `ud_prev` begins: its leading zero
     /// (the ground), floor i at `floors_at(b) + i + 1`.
     #[inline(always)]
@@ -1148,11 +1184,9 @@ impl<'a> Stepper<'a> {
             });
         }
         // The fast steps' works: per mode, plus the a·a terms of all modes at once.
-        let (aa, c) = (self.aa_acc, &self.p.full);
-        let dot = |k: &[f64; 3]| k[0] * aa[0] + k[1] * aa[1] + k[2] * aa[2];
-        let lanes = |w: [f64; 4]| (w[0] + w[1]) + (w[2] + w[3]);
-        self.energy.input += lanes(self.work_acc[0]) + dot(&c.aa_input);
-        self.energy.damping += lanes(self.work_acc[1]) + dot(&c.aa_damping);
+        let (input, damping) = self.fast_works();
+        self.energy.input += input;
+        self.energy.damping += damping;
         self.aa_acc = [0.0; 3];
         self.work_acc = [[0.0; 4]; 2];
         self.resolve_deferred();
@@ -1167,6 +1201,60 @@ impl<'a> Stepper<'a> {
         self.s.persistent.clear();
         self.diag.final_x = self.s.x.clone();
         self.diag.final_v = self.s.v.clone();
-        Ok(self.p.modal.energy(&self.s.x, &self.s.v))
+        let final_e = self.p.modal.energy(&self.s.x, &self.s.v);
+        let e = &self.energy;
+        let balance = e.initial + e.input - e.damping - e.contact - final_e;
+        if balance.abs() > AUDIT_TOLERANCE * (e.initial + e.input.abs() + final_e) {
+            return Err(SolverError::Stalled {
+                time: self.s.t,
+                reason: format!(
+                    "the energy audit does not close at the end (initial {:.6e} J + input \
+                     {:.6e} J − damping {:.6e} J − contact {:.6e} J − final {:.6e} J = \
+                     {balance:.3e} J): the results are not trustworthy",
+                    e.initial, e.input, e.damping, e.contact, final_e
+                ),
+            });
+        }
+        Ok(final_e)
+    }
+
+    /// The input and damping works of the accepted fast steps not yet folded into the
+    /// account (`work_acc`, `aa_acc`), J.
+    fn fast_works(&self) -> (f64, f64) {
+        let (aa, c) = (self.aa_acc, &self.p.full);
+        let dot = |k: &[f64; 3]| k[0] * aa[0] + k[1] * aa[1] + k[2] * aa[2];
+        let lanes = |w: [f64; 4]| (w[0] + w[1]) + (w[2] + w[3]);
+        (
+            lanes(self.work_acc[0]) + dot(&c.aa_input),
+            lanes(self.work_acc[1]) + dot(&c.aa_damping),
+        )
+    }
+
+    /// Held contacts and impacts can only remove energy: a contact account below
+    /// −[`AUDIT_TOLERANCE`] of the energy scale (initial + |input| so far + present energy)
+    /// means a held phase went wrong, and the run stops there, saying so, instead of
+    /// returning garbage.
+    pub(super) fn check_contact_account(&self) -> Result<(), SolverError> {
+        let e = &self.energy;
+        let input = e.input + self.fast_works().0;
+        let now = self.p.modal.energy(&self.s.x, &self.s.v);
+        if e.contact < -AUDIT_TOLERANCE * (e.initial + input.abs() + now) {
+            return Err(SolverError::Stalled {
+                time: self.s.t,
+                reason: format!(
+                    "the held contacts {:?} did {:.3e} J of work on the buildings (input so far \
+                     {input:.3e} J, present energy {now:.3e} J): a held phase lost its \
+                     constraint (docs/solvers.md, a held phase cut by another contact's \
+                     closure); the results would not be trustworthy",
+                    self.s
+                        .persistent
+                        .iter()
+                        .map(|&(c, _)| c)
+                        .collect::<Vec<_>>(),
+                    -e.contact
+                ),
+            });
+        }
+        Ok(())
     }
 }

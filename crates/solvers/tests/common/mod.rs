@@ -11,3 +11,7 @@ pub fn log_log_slope(x: &[f64], y: &[f64]) -> f64 {
     let den: f64 = lx.iter().map(|a| (a - mx).powi(2)).sum();
     num / den
 }
+
+// Used by `random_scenes.rs` only: the other test crates that include `common` leave it unused.
+#[allow(dead_code)]
+pub mod random;

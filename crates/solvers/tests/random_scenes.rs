@@ -1,0 +1,1030 @@
+//! Randomized differential tests: many small random scenes built in code (2 or 3 shear sticks
+//! of 1–6 floors side by side, contacts at facing floors and sometimes a wall, a random
+//! piecewise-linear ground motion), each checked for invariants that hold between
+//! independent implementations or runs:
+//!
+//! 1. the momentum method's peaks with a history (every sample observed) and without (the
+//!    energy envelope may skip samples) are bit-identical (the skip is exact by design);
+//! 2. the momentum method with all modes and the impulse method (physical coordinates,
+//!    adaptive Dormand–Prince, the same impact law) find the same impacts and peaks to the
+//!    impulse method's error control;
+//! 3. the momentum method's peaks are continuous maxima: the same piecewise-linear record on
+//!    a k× finer grid gives the same peaks to round-off (the method is exact between events);
+//! 4. the energy audits close (momentum to round-off, impulse to its tolerance), contact
+//!    energy is never negative, elastic impacts lose nothing, and every impact achieves c_r;
+//! 5. the gap element, adaptive and Newmark at a fine step, runs without panicking, ends Ok or
+//!    with a typed error, and its two integrators agree.
+//!
+//! The seeds are deterministic: `POUND_RANDOM_SEEDS=N` widens the sweep (default 32 seeds,
+//! 0 … 31), `POUND_RANDOM_FIRST=S` starts it at seed S, `POUND_RANDOM_SEED=S` runs one seed.
+//! A failure prints the seed and the scene. Sweep:
+//! `POUND_RANDOM_SEEDS=1000 cargo test --release -p solvers --test random_scenes -- --nocapture`.
+//!
+//! **What the 1000-seed sweep found, and what is left.** It found two defects of the momentum
+//! method, both mended in the release that added this file:
+//! - *A closure located on the re-arming band.* After an impact the closure search stayed
+//!   shifted by the band `pen` = 1e-9·max(gap, 1 mm) for a whole segment; a contact that
+//!   rebounded and closed again within it was found at δ = +pen, pen/v late (seed 246: impact
+//!   6 at 0.787095 s, 2.07e-10 s late; peaks 8.5e-7 off the impulse method at any tolerance).
+//!   Failed: seeds 158, 188, 216, 246, 456, 471, 477, 564, 629, 675, 710, 880, 907, 918.
+//!   Now re-armed inside the segment (`Stepper::locate_closures`, `Locator::locate`).
+//! - *A held contact cut short by another contact's closure.* The held gaps were left open at
+//!   the cut (229 µm in seed 68); the next held segments closed them with enormous forces
+//!   whose projections kicked the other contact into millions of closures 2 ns apart: a
+//!   `Stalled` error (seeds 62, 68, 184, 292, 404, 433, 460, 544, 651, 733, 794, 796) or an
+//!   energy audit off by 1e12 J (seed 796). Now the held gaps are closed at the cut
+//!   (`Stepper::close_held_gaps`), and a held phase that does work stops the run.
+//!
+//! Left failing on purpose (the default seeds pass; the 1000-seed sweep does not):
+//! - *Held phases do not converge under record refinement* as the impulse method's do
+//!   (invariant 2, held contacts: different impact counts, or peak differences above the
+//!   (h/h₀)² bound): seeds 62, 68, 85, 184, 196, 197, 232, 323, 365, 433, 460, 464, 472, 509,
+//!   544, 586, 704, 733, 779, 794, 796, 810, 826, 897, 914. The holding forces are constant over
+//!   a segment, so a held phase is only as accurate as its segments are short.
+//! - *A stall*: seed 651 on its record refined 4× (`Stalled` at 3.6198 s).
+//! - *Audits closing to 6e-9 … 1.4e-7 only* (invariant 4): seeds 292, 298 and 849, where a
+//!   c_r = 1 contact rattles against a held neighbour; the impulse method stops on the same
+//!   three with an event storm (101 impacts in 0.05 s).
+
+// `common::log_log_slope` is not used here.
+#[allow(dead_code)]
+mod common;
+
+use common::random::SplitMix64;
+use solvers::{History, Method, RunOutput, SolverError};
+use structure::testing::{free_scene, refined};
+use structure::{Building, Contact, GroundMotion, Scene};
+
+// --- scenes ----------------------------------------------------------------------------------
+
+/// One random scene and its description.
+struct Case {
+    seed: u64,
+    scene: Scene,
+    what: String,
+}
+
+/// The first (longest) period of `b`, s.
+fn first_period(b: &Building) -> f64 {
+    b.modes().expect("modes").periods()[0]
+}
+
+/// A random building: `n` floors of 1e4 … 1e6 kg, story stiffnesses of a random profile
+/// scaled so that the first period is `t1` s, damping ratio 0 … 0.08 (0 one time in five).
+fn building(r: &mut SplitMix64, name: &str) -> Building {
+    let n = r.int(1, 6);
+    let m0 = r.log_uniform(2e4, 5e5);
+    let masses: Vec<f64> = (0..n)
+        .map(|_| (m0 * r.log_uniform(0.5, 2.0)).clamp(1e4, 1e6))
+        .collect();
+    // A tapered profile with random factors: stiffer below, within a factor 4 per story.
+    let shape: Vec<f64> = (0..n)
+        .map(|j| (1.0 - 0.5 * j as f64 / n as f64) * r.log_uniform(0.5, 2.0))
+        .collect();
+    let zeta = if r.chance(0.2) {
+        0.0
+    } else {
+        r.uniform(0.0, 0.08)
+    };
+    let t1 = r.log_uniform(0.1, 2.0);
+    let trial = Building::new(name, masses.clone(), shape.clone(), zeta);
+    // T ∝ k^(−½): scale the profile to the target period.
+    let scale = (first_period(&trial) / t1).powi(2);
+    Building::new(
+        name,
+        masses,
+        shape.iter().map(|k| k * scale).collect(),
+        zeta,
+    )
+}
+
+fn restitution(r: &mut SplitMix64) -> f64 {
+    if r.chance(0.2) {
+        r.unit()
+    } else {
+        r.pick(&[1.0, 0.8, 0.5, 0.0])
+    }
+}
+
+/// A random piecewise-linear ground acceleration: a few sinusoids (0.3 … 12 Hz) and white
+/// noise under a rise–plateau–decay envelope, scaled to a PGA of 1 … 8 m/s².
+fn ground(r: &mut SplitMix64) -> GroundMotion {
+    let dt = r.pick(&[0.01, 0.02]);
+    let len = r.uniform(3.0, 8.0);
+    let n = (len / dt).round() as usize + 1;
+    let waves: Vec<(f64, f64, f64)> = (0..r.int(2, 8))
+        .map(|_| {
+            (
+                r.log_uniform(0.3, 12.0) * 2.0 * std::f64::consts::PI,
+                r.uniform(0.2, 1.0),
+                r.uniform(0.0, 2.0 * std::f64::consts::PI),
+            )
+        })
+        .collect();
+    let noise = r.uniform(0.0, 0.6);
+    let rise = r.uniform(0.05, 0.3) * len;
+    let plateau_end = rise + r.uniform(0.1, 0.4) * len;
+    let decay = r.uniform(1.0, 4.0) / (len - plateau_end).max(dt);
+    let mut accel: Vec<f64> = (0..n)
+        .map(|i| {
+            let t = i as f64 * dt;
+            let env = if t < rise {
+                (t / rise).powi(2)
+            } else if t < plateau_end {
+                1.0
+            } else {
+                (-(t - plateau_end) * decay).exp()
+            };
+            let s: f64 = waves.iter().map(|(w, a, p)| a * (w * t + p).sin()).sum();
+            env * (s + noise * r.normal())
+        })
+        .collect();
+    let pga = r.uniform(1.0, 8.0);
+    let peak = accel.iter().fold(0.0_f64, |m, a| m.max(a.abs()));
+    for a in &mut accel {
+        *a *= pga / peak;
+    }
+    GroundMotion::new("random", dt, accel).expect("a valid record")
+}
+
+/// The scene of `seed`. Valid by construction (the rules of the scene file's validation:
+/// contacts join different buildings at floors in range, one contact per floor pair, gaps
+/// ≥ 0 and not closed at t = 0 (the buildings start at rest), restitution in [0, 1]).
+fn draw(seed: u64) -> Case {
+    let mut r = SplitMix64::new(seed);
+    let nb = if r.chance(0.2) { 3 } else { 2 };
+    let names = ["A", "B", "C"];
+    let buildings: Vec<Building> = (0..nb).map(|i| building(&mut r, names[i])).collect();
+    let mut contacts = vec![];
+    for b in 0..nb - 1 {
+        // Without story heights floor i faces floor i; the shorter building's roof is the
+        // usual contact, sometimes several facing floors, sometimes one lower floor.
+        let facing = buildings[b].n_floors().min(buildings[b + 1].n_floors());
+        let floors: Vec<usize> = match r.unit() {
+            u if u < 0.6 => vec![facing - 1],
+            u if u < 0.85 => {
+                let mut f: Vec<usize> = (0..facing - 1).filter(|_| r.chance(0.5)).collect();
+                f.push(facing - 1);
+                f
+            }
+            _ => vec![r.int(0, facing - 1)],
+        };
+        let gap = r.log_uniform(0.005, 0.10);
+        let cr = restitution(&mut r);
+        let own = r.chance(0.2);
+        for f in floors {
+            let (gap, cr) = if own {
+                (r.log_uniform(0.005, 0.10), restitution(&mut r))
+            } else {
+                (gap, cr)
+            };
+            contacts.push(Contact {
+                left: b,
+                left_dof: f,
+                right: b + 1,
+                right_dof: f,
+                gap,
+                restitution: cr,
+                wall: false,
+            });
+        }
+    }
+    if r.chance(0.15) {
+        // A rigid wall right of the last building, at its roof.
+        let b = nb - 1;
+        let f = buildings[b].n_floors() - 1;
+        contacts.push(Contact {
+            left: b,
+            left_dof: f,
+            right: b,
+            right_dof: f,
+            gap: r.log_uniform(0.005, 0.10),
+            restitution: restitution(&mut r),
+            wall: true,
+        });
+    }
+    let g = ground(&mut r);
+    let duration = (g.accel.len() - 1) as f64 * g.dt;
+    let mut scene = free_scene(buildings, contacts, duration);
+    scene.name = format!("random-{seed}");
+    let pga = g.accel.iter().fold(0.0_f64, |m, a| m.max(a.abs()));
+    let what = describe(&scene, &g, pga);
+    scene.ground = Some(g);
+    Case { seed, scene, what }
+}
+
+fn describe(s: &Scene, g: &GroundMotion, pga: f64) -> String {
+    let mut out = format!(
+        "record dt {} s, {:.3} s, PGA {pga:.3} m/s²",
+        g.dt, s.duration
+    );
+    for b in &s.buildings {
+        let zeta = match &b.damping {
+            structure::Damping::Uniform(z) => *z,
+            structure::Damping::PerMode(v) => v[0],
+        };
+        out += &format!(
+            "\n  {}: {} floors, T1 {:.4} s, zeta {zeta:.4}, m {}, k {}",
+            b.name,
+            b.n_floors(),
+            first_period(b),
+            b.masses
+                .iter()
+                .map(|m| format!("{m:.4e}"))
+                .collect::<Vec<_>>()
+                .join("/"),
+            b.story_stiffness
+                .iter()
+                .map(|k| format!("{k:.4e}"))
+                .collect::<Vec<_>>()
+                .join("/"),
+        );
+    }
+    for (i, c) in s.contacts.iter().enumerate() {
+        let right = if c.wall {
+            "wall".to_string()
+        } else {
+            format!("{}.{}", s.buildings[c.right].name, c.right_dof + 1)
+        };
+        out += &format!(
+            "\n  contact {i}: {}.{} - {right}, gap {:.4} m, c_r {:.4}",
+            s.buildings[c.left].name,
+            c.left_dof + 1,
+            c.gap,
+            c.restitution
+        );
+    }
+    out
+}
+
+// --- the sweep -------------------------------------------------------------------------------
+
+fn env_u64(key: &str) -> Option<u64> {
+    std::env::var(key).ok().and_then(|v| v.trim().parse().ok())
+}
+
+/// The seeds of this run (see the module docs).
+fn seeds() -> Vec<u64> {
+    if let Some(s) = env_u64("POUND_RANDOM_SEED") {
+        return vec![s];
+    }
+    let first = env_u64("POUND_RANDOM_FIRST").unwrap_or(0);
+    let n = env_u64("POUND_RANDOM_SEEDS").unwrap_or(32);
+    (first..first + n).collect()
+}
+
+/// What one invariant found on one seed.
+enum Verdict {
+    /// Checked: the measured values, named.
+    Pass(Vec<(&'static str, f64)>),
+    /// Not applicable to this draw, with the reason (counted).
+    Skip(String),
+    Fail(String),
+}
+
+/// Runs `check` on every seed, prints the largest measured values (with their seeds) and the
+/// skip reasons, and fails with every failing seed and its scene.
+fn sweep(name: &str, check: impl Fn(&Case) -> Verdict) {
+    let clock = std::time::Instant::now();
+    let seeds = seeds();
+    let mut worst: Vec<(&'static str, f64, u64)> = vec![];
+    let mut skips: std::collections::BTreeMap<String, Vec<u64>> = Default::default();
+    let mut fails = vec![];
+    let mut passed = 0;
+    for &seed in &seeds {
+        let case = draw(seed);
+        match check(&case) {
+            Verdict::Pass(values) => {
+                passed += 1;
+                for (k, v) in values {
+                    match worst.iter_mut().find(|w| w.0 == k) {
+                        Some(w) if v > w.1 || v.is_nan() => *w = (k, v, seed),
+                        Some(_) => {}
+                        None => worst.push((k, v, seed)),
+                    }
+                }
+            }
+            Verdict::Skip(why) => skips.entry(why).or_default().push(seed),
+            Verdict::Fail(msg) => fails.push(format!(
+                "seed {seed} (POUND_RANDOM_SEED={seed}): {msg}\n  scene: {}",
+                case.what
+            )),
+        }
+    }
+    eprintln!(
+        "{name}: {} seeds, {passed} checked, {} failed, {:.2} s",
+        seeds.len(),
+        fails.len(),
+        clock.elapsed().as_secs_f64()
+    );
+    for (k, v, s) in &worst {
+        eprintln!("  worst {k}: {v:.3e} (seed {s})");
+    }
+    for (why, s) in &skips {
+        let shown: Vec<String> = s.iter().take(12).map(|x| x.to_string()).collect();
+        eprintln!("  skipped ({} seeds: {}): {why}", s.len(), shown.join(" "));
+    }
+    for f in &fails {
+        eprintln!("FAIL {f}");
+    }
+    assert!(
+        fails.is_empty(),
+        "{name}: {} failing seeds:\n{}",
+        fails.len(),
+        fails.join("\n")
+    );
+}
+
+/// The class of a solver error, for counting.
+fn kind(e: &SolverError) -> &'static str {
+    match e {
+        SolverError::StepSizeUnderflow { .. } => "step size underflow",
+        SolverError::NonFinite { .. } => "non-finite",
+        SolverError::NewtonFailure { .. } => "Newton failure",
+        SolverError::StepBudget { .. } => "step budget",
+        SolverError::EventStorm { .. } => "event storm",
+        SolverError::SingularContact { .. } => "singular contact",
+        SolverError::Refused { .. } => "refused",
+        SolverError::Stalled { .. } => "stalled",
+        SolverError::Model(_) => "model",
+    }
+}
+
+// --- comparisons -----------------------------------------------------------------------------
+
+/// Largest relative difference of the peak story shears and floor displacements, and where.
+fn peak_diff(a: &RunOutput, b: &RunOutput) -> (f64, String) {
+    let mut worst = (0.0, String::new());
+    for (x, y) in a.buildings.iter().zip(&b.buildings) {
+        let pairs = [
+            ("shear", &x.story_shear_max, &y.story_shear_max),
+            ("disp", &x.floor_displacement_max, &y.floor_displacement_max),
+        ];
+        for (what, p, q) in pairs {
+            for (j, (p, q)) in p.iter().zip(q.iter()).enumerate() {
+                let d = (p - q).abs() / p.abs().max(f64::MIN_POSITIVE);
+                if !(d <= worst.0) {
+                    worst = (d, format!("{} {what} {}: {p:e} vs {q:e}", x.name, j + 1));
+                }
+            }
+        }
+    }
+    worst
+}
+
+/// Largest overlap-maximum difference relative to the largest floor displacement peak.
+fn overlap_diff(a: &RunOutput, b: &RunOutput) -> f64 {
+    let scale = a
+        .buildings
+        .iter()
+        .flat_map(|x| x.floor_displacement_max.iter())
+        .fold(0.0_f64, |m, v| m.max(*v));
+    a.overlaps
+        .iter()
+        .zip(&b.overlaps)
+        .map(|(x, y)| (x.max_overlap - y.max_overlap).abs() / scale)
+        .fold(0.0, f64::max)
+}
+
+/// Impacts compared: the same count and contacts, the largest |Δt| (s) and the largest
+/// velocity difference relative to the approach speed; `Err` names the first mismatch.
+fn impact_diff(a: &RunOutput, b: &RunOutput) -> Result<(f64, f64), String> {
+    if a.impacts.len() != b.impacts.len() {
+        let first = a
+            .impacts
+            .iter()
+            .zip(&b.impacts)
+            .position(|(x, y)| x.contact != y.contact || (x.time - y.time).abs() > 1e-6)
+            .unwrap_or(a.impacts.len().min(b.impacts.len()));
+        let show = |o: &RunOutput| {
+            o.impacts.get(first).map_or("none".to_string(), |i| {
+                format!(
+                    "contact {} at {:.9} s, approach {:.3e} m/s",
+                    i.contact, i.time, i.relative_velocity_before
+                )
+            })
+        };
+        return Err(format!(
+            "{} vs {} impacts; first difference, impact {first}: {} vs {}",
+            a.impacts.len(),
+            b.impacts.len(),
+            show(a),
+            show(b)
+        ));
+    }
+    let mut worst = (0.0_f64, 0.0_f64);
+    for (k, (x, y)) in a.impacts.iter().zip(&b.impacts).enumerate() {
+        if x.contact != y.contact {
+            return Err(format!(
+                "impact {k}: contact {} at {} s vs contact {} at {} s",
+                x.contact, x.time, y.contact, y.time
+            ));
+        }
+        let v = x.relative_velocity_before.abs();
+        worst.0 = worst.0.max((x.time - y.time).abs());
+        worst.1 = worst
+            .1
+            .max((x.relative_velocity_before - y.relative_velocity_before).abs() / v)
+            .max((x.relative_velocity_after - y.relative_velocity_after).abs() / v);
+    }
+    Ok(worst)
+}
+
+/// Whether a run took a discrete decision whose outcome depends on the record grid by design:
+/// a persistent-contact phase (held with a constant force per base step), a chattering
+/// capture or a touching contact (the capture rule's time scale is the record step; such an
+/// impact has no achieved restitution). A capture released at once leaves no phase, so the
+/// impacts are looked at too.
+fn grid_dependent(o: &RunOutput) -> bool {
+    !o.persistent_contacts.is_empty() || o.impacts.iter().any(|i| i.restitution_undefined.is_some())
+}
+
+/// `scene` with its record refined `k` times (the same piecewise-linear ground motion).
+fn refine(scene: &Scene, k: usize) -> Scene {
+    let mut s = scene.clone();
+    if k > 1 {
+        s.ground = Some(refined(scene.ground.as_ref().unwrap(), k));
+    }
+    s
+}
+
+/// The impulse method on `scene` at tolerance `tol`.
+fn impulse_at(scene: &Scene, tol: f64) -> Result<RunOutput, SolverError> {
+    let mut s = scene.clone();
+    s.gap_element.tolerance = tol;
+    solvers::run(&s, Method::Impulse, None)
+}
+
+/// The momentum method's response to a round-off-sized change of the scene (the record
+/// scaled by 1 + 2⁻⁵⁰): its largest relative peak change and whether the impacts stay the
+/// same (count and contacts). Pounding can be chaotic: a long sequence of impacts amplifies
+/// any difference, round-off included, and this measures by how much on the scene at hand.
+fn round_off_response(scene: &Scene, mom: &RunOutput) -> (f64, bool) {
+    let mut s = scene.clone();
+    let g = s.ground.as_mut().unwrap();
+    for a in &mut g.accel {
+        *a *= 1.0 + 4.0 * f64::EPSILON;
+    }
+    match solvers::run(&s, Method::Momentum, None) {
+        Ok(o) => (peak_diff(mom, &o).0, impact_diff(mom, &o).is_ok()),
+        Err(_) => (f64::INFINITY, false),
+    }
+}
+
+fn verbose() -> bool {
+    std::env::var("POUND_RANDOM_VERBOSE").is_ok()
+}
+
+// --- the invariants --------------------------------------------------------------------------
+
+/// Bit-identical peaks with and without a history: the energy envelope's skip is exact.
+/// Catches a bound that is not rigorous (a skipped sample that would have raised a peak).
+#[test]
+fn momentum_peaks_do_not_depend_on_the_history() {
+    sweep("history", |c| {
+        let plain = match solvers::run(&c.scene, Method::Momentum, None) {
+            Ok(o) => o,
+            Err(e) => return Verdict::Skip(format!("momentum: {}", kind(&e))),
+        };
+        let mut h = History::default();
+        let full = match solvers::run(&c.scene, Method::Momentum, Some(&mut h)) {
+            Ok(o) => o,
+            Err(e) => return Verdict::Fail(format!("with a history: {e}, without: Ok")),
+        };
+        let mut bits = 0.0_f64;
+        for (a, b) in plain.buildings.iter().zip(&full.buildings) {
+            for (p, q) in a.story_shear_max.iter().zip(&b.story_shear_max).chain(
+                a.floor_displacement_max
+                    .iter()
+                    .zip(&b.floor_displacement_max),
+            ) {
+                bits = bits.max((p.to_bits() as i64 - q.to_bits() as i64).unsigned_abs() as f64);
+            }
+        }
+        for (a, b) in plain.overlaps.iter().zip(&full.overlaps) {
+            bits = bits.max(
+                (a.max_overlap.to_bits() as i64 - b.max_overlap.to_bits() as i64).unsigned_abs()
+                    as f64,
+            );
+            if a.time != b.time {
+                return Verdict::Fail(format!(
+                    "overlap {}.{}-{}.{}: maximum at {} s without a history, {} s with",
+                    a.left, a.left_floor, a.right, a.right_floor, a.time, b.time
+                ));
+            }
+        }
+        if plain.impacts.len() != full.impacts.len() || plain.overlaps.len() != full.overlaps.len()
+        {
+            return Verdict::Fail("impacts or overlaps differ with a history".into());
+        }
+        if bits > 0.0 {
+            let (d, at) = peak_diff(&plain, &full);
+            return Verdict::Fail(format!(
+                "peaks differ by {bits} ulp with a history (relative {d:.3e}, {at})"
+            ));
+        }
+        Verdict::Pass(vec![
+            ("ulps", bits),
+            ("impacts", plain.impacts.len() as f64),
+        ])
+    });
+}
+
+/// The impulse method's two tolerances: the difference from the momentum method must follow
+/// them (its error control), as `impulse.rs` checks on the paper scene.
+const TOL_COARSE: f64 = 1e-9;
+const TOL_FINE: f64 = 1e-11;
+
+/// Below this relative peak difference the comparison is at the impulse method's error at
+/// `TOL_FINE` (100 × the tolerance, as `impulse.rs` and `momentum_peaks.rs` allow on the
+/// paper scenes) and no convergence is asked for.
+const IMPULSE_FLOOR: f64 = 100.0 * TOL_FINE;
+
+/// Refinements of the record for the held-contact comparison.
+const HELD_REFINEMENTS: [usize; 3] = [1, 4, 16];
+
+/// Momentum (all modes, exact between events) against the impulse method (physical
+/// coordinates, adaptive Dormand–Prince, the same impact law).
+///
+/// Without grid-dependent decisions ([`grid_dependent`]) both integrate the same equations:
+/// at `TOL_FINE` the same impacts (count and contacts), and peaks that differ by the impulse
+/// method's error: below `IMPULSE_FLOOR`, or at least 10 times closer than at `TOL_COARSE`
+/// (100 times the tolerance; the paper scene gives 88, and 30 is asserted there). Catches
+/// any error of either method that does not shrink with the tolerance: a wrong motion,
+/// impact law or event instant (e.g. a closure located off δ = 0), a missed impact.
+///
+/// With held contacts the momentum method holds with a constant force per base step h, the
+/// impulse method with the exact instantaneous force: they differ by O(h²) or better
+/// (order 3 measured in `impulse.rs`). On the record refined 1, 4 and 16 times the
+/// difference must fall at least as h² from the first refinement whose impacts agree to the
+/// finest, where they must agree. Catches a holding force, projection or release that does
+/// not converge to the exact one.
+#[test]
+fn momentum_matches_the_impulse_method() {
+    sweep("impulse", |c| {
+        let (mom, imp) = match (
+            solvers::run(&c.scene, Method::Momentum, None),
+            impulse_at(&c.scene, TOL_FINE),
+        ) {
+            (Ok(a), Ok(b)) => (a, b),
+            (Err(a), Err(b)) => {
+                return Verdict::Skip(format!("both fail: {} / {}", kind(&a), kind(&b)))
+            }
+            (a, b) => {
+                return Verdict::Fail(format!(
+                    "momentum {} / impulse {}",
+                    a.err().map_or("Ok".into(), |e| e.to_string()),
+                    b.err().map_or("Ok".into(), |e| e.to_string())
+                ))
+            }
+        };
+        if !grid_dependent(&mom) && !grid_dependent(&imp) {
+            let (pert, same) = round_off_response(&c.scene, &mom);
+            let impacts = impact_diff(&mom, &imp);
+            if impacts.is_err() && !same {
+                return Verdict::Skip("chaotic: a round-off change moves the impacts".into());
+            }
+            let (d, at) = peak_diff(&mom, &imp);
+            let coarse = match impulse_at(&c.scene, TOL_COARSE) {
+                Ok(o) => peak_diff(&mom, &o).0,
+                Err(e) => return Verdict::Fail(format!("impulse at tol {TOL_COARSE:e}: {e}")),
+            };
+            let o = overlap_diff(&mom, &imp);
+            if verbose() {
+                eprintln!(
+                    "seed {}: impacts {} peaks {d:.3e} ({at}) at {TOL_FINE:e}, {coarse:.3e} at \
+                     {TOL_COARSE:e}; impacts {impacts:?}, overlaps {o:.3e}",
+                    c.seed,
+                    mom.impacts.len(),
+                );
+            }
+            let converging =
+                impacts.is_ok() && (d <= IMPULSE_FLOOR || d <= coarse / 10.0 || d <= 100.0 * pert);
+            if !converging {
+                // Some scenes amplify the integration error so much (stiff undamped sticks
+                // rattling through a hundred impacts) that the tolerance is not yet in its
+                // asymptotic range at TOL_FINE: two decades further, the same impacts and a
+                // difference that still shrinks (at least 3 times per decade, 10 expected).
+                let tighter: Vec<_> = [TOL_FINE / 10.0, TOL_FINE / 100.0]
+                    .iter()
+                    .map(|&tol| impulse_at(&c.scene, tol))
+                    .collect();
+                let diffs: Vec<Option<f64>> = tighter
+                    .iter()
+                    .map(|r| {
+                        r.as_ref()
+                            .ok()
+                            .filter(|i| impact_diff(&mom, i).is_ok())
+                            .map(|i| peak_diff(&mom, i).0)
+                    })
+                    .collect();
+                let recovered = match (diffs[0], diffs[1]) {
+                    (Some(a), Some(b)) => b <= IMPULSE_FLOOR || b <= a / 3.0,
+                    _ => false,
+                };
+                if !recovered {
+                    let what = match impacts {
+                        Err(e) => format!("at tol {TOL_FINE:e}: {e}"),
+                        Ok(_) => format!(
+                            "peaks differ by {coarse:.3e} at tol {TOL_COARSE:e} and {d:.3e} \
+                             at {TOL_FINE:e} ({at})"
+                        ),
+                    };
+                    return Verdict::Fail(format!(
+                        "{what}; at tol {:e} and {:e}: {diffs:?}: not the impulse method's \
+                         integration error (a round-off change of the record moves the momentum \
+                         peaks by {pert:.3e})",
+                        TOL_FINE / 10.0,
+                        TOL_FINE / 100.0
+                    ));
+                }
+                return Verdict::Pass(vec![("free: converged only below the fine tolerance", 1.0)]);
+            }
+            let (dt, dv) = impacts.unwrap();
+            let mut v = vec![
+                ("free: peaks at the fine tolerance", d),
+                ("free: impact times at the fine tolerance (s)", dt),
+                ("free: impact velocities / approach", dv),
+                ("free: overlaps / largest displacement", o),
+            ];
+            if d > IMPULSE_FLOOR {
+                v.push((
+                    "free: fine / coarse peak difference (above floor)",
+                    d / coarse,
+                ));
+            }
+            v.push(("free: round-off response of the peaks", pert));
+            return Verdict::Pass(v);
+        }
+        let mut rows = vec![];
+        let mut fine_imp = imp.clone();
+        for &k in &HELD_REFINEMENTS {
+            let s = refine(&c.scene, k);
+            let h = solvers::momentum::Problem::new(&s).map_or(f64::NAN, |p| p.h);
+            let (m, i) = if k == 1 {
+                (mom.clone(), imp.clone())
+            } else {
+                match (
+                    solvers::run(&s, Method::Momentum, None),
+                    impulse_at(&s, TOL_FINE),
+                ) {
+                    (Ok(a), Ok(b)) => (a, b),
+                    (a, b) => {
+                        return Verdict::Fail(format!(
+                            "record refined {k}x: momentum {} / impulse {}",
+                            a.err().map_or("Ok".into(), |e| e.to_string()),
+                            b.err().map_or("Ok".into(), |e| e.to_string())
+                        ))
+                    }
+                }
+            };
+            rows.push((k, h, impact_diff(&m, &i).map(|_| peak_diff(&m, &i).0)));
+            fine_imp = i;
+        }
+        if verbose() {
+            eprintln!("seed {}: held {rows:?}", c.seed);
+        }
+        let (kf, hf, df) = rows.last().unwrap().clone();
+        let df = match df {
+            Ok(d) => d,
+            Err(e) => {
+                let s = refine(&c.scene, kf);
+                let chaotic = solvers::run(&s, Method::Momentum, None)
+                    .is_ok_and(|m| !round_off_response(&s, &m).1);
+                if chaotic {
+                    return Verdict::Skip(
+                        "held, chaotic: a round-off change moves the impacts".into(),
+                    );
+                }
+                return Verdict::Fail(format!("held contacts, record refined {kf}x: {e}"));
+            }
+        };
+        let (k0, h0, d0) = rows
+            .iter()
+            .find_map(|(k, h, d)| d.as_ref().ok().map(|d| (*k, *h, *d)))
+            .unwrap();
+        // The impulse method's own error at TOL_FINE is at most its change from TOL_COARSE.
+        let floor = match impulse_at(&refine(&c.scene, kf), TOL_COARSE) {
+            Ok(o) => IMPULSE_FLOOR.max(peak_diff(&fine_imp, &o).0),
+            Err(e) => return Verdict::Fail(format!("impulse at tol {TOL_COARSE:e}: {e}")),
+        };
+        // h² with a factor 2 for a pre-asymptotic first refinement.
+        let bound = 2.0 * d0 * (hf / h0).powi(2) + floor;
+        if !(df <= bound) {
+            return Verdict::Fail(format!(
+                "held contacts: peak difference {d0:.3e} at h = {h0:.3e} s (record x{k0}), \
+                 {df:.3e} at h = {hf:.3e} s (x{kf}), above the h² bound {bound:.3e}"
+            ));
+        }
+        Verdict::Pass(vec![
+            ("held: peaks on the finest record", df),
+            ("held: finest / h² bound", df / bound),
+            ("held: first refinement with the same impacts", k0 as f64),
+        ])
+    });
+}
+
+/// Relative peak difference allowed between the record and the same record refined: the
+/// method is exact between events and locates events to ~2ε·t, so only round-off amplified
+/// by the impacts remains (measured up to 7.9e-11 over 1000 seeds where nothing else moves
+/// them; `momentum_peaks.rs` allows 1e-11 on the paper scene). Where a round-off change of the
+/// record moves the peaks by p (a chaotic sequence of impacts), 100 p is allowed instead.
+const REFINED_PEAKS: f64 = 1e-10;
+
+/// The momentum method's peaks are continuous maxima of an exact solution: the same record
+/// resampled 2, 3 or 5 times finer (linear interpolation, the same ground motion) changes no
+/// impact and no peak beyond round-off. Runs with grid-dependent decisions are skipped
+/// (counted): those are grid-dependent by design. Catches peaks taken at samples (a missed
+/// interior extremum: the coarse run would be low), event instants or states that depend on
+/// the grid (e.g. a base-step split that is not exact).
+#[test]
+fn momentum_peaks_are_continuous_maxima() {
+    sweep("refined", |c| {
+        let k = [2, 3, 5][(c.seed % 3) as usize];
+        let (a, b) = match (
+            solvers::run(&c.scene, Method::Momentum, None),
+            solvers::run(&refine(&c.scene, k), Method::Momentum, None),
+        ) {
+            (Ok(a), Ok(b)) => (a, b),
+            (Err(a), Err(b)) => {
+                return Verdict::Skip(format!("both fail: {} / {}", kind(&a), kind(&b)))
+            }
+            (a, b) => {
+                return Verdict::Fail(format!(
+                    "record: {}, refined {k}x: {}",
+                    a.err().map_or("Ok".into(), |e| e.to_string()),
+                    b.err().map_or("Ok".into(), |e| e.to_string())
+                ))
+            }
+        };
+        let (d, at) = peak_diff(&a, &b);
+        if grid_dependent(&a) || grid_dependent(&b) {
+            return Verdict::Skip("held, captured or touching contacts (grid-dependent)".into());
+        }
+        let (pert, same) = round_off_response(&c.scene, &a);
+        let (dt, dv) = match impact_diff(&a, &b) {
+            Ok(x) => x,
+            Err(_) if !same => {
+                return Verdict::Skip("chaotic: a round-off change moves the impacts".into())
+            }
+            Err(e) => return Verdict::Fail(format!("refined {k}x: {e}")),
+        };
+        let o = overlap_diff(&a, &b);
+        let allowed = REFINED_PEAKS.max(100.0 * pert);
+        if verbose() {
+            eprintln!(
+                "seed {} k {k}: impacts {} peaks {d:.3e} ({at}) impact times {dt:.3e} velocities {dv:.3e} overlaps {o:.3e}",
+                c.seed,
+                a.impacts.len(),
+            );
+        }
+        if !(d <= allowed && o <= allowed) {
+            return Verdict::Fail(format!(
+                "refined {k}x: peaks differ by {d:.3e} ({at}), overlaps by {o:.3e}; a \
+                 round-off change of the record moves them by {pert:.3e}"
+            ));
+        }
+        Verdict::Pass(vec![
+            ("peaks", d),
+            ("round-off response of the peaks", pert),
+            ("impact times (s)", dt),
+            ("impact velocities / approach", dv),
+            ("overlaps / largest displacement", o),
+        ])
+    });
+}
+
+/// The momentum method's energy balance relative to the larger of input, initial and
+/// damping energy: exact propagation and impacts, so round-off (measured up to 6.8e-12 over
+/// 984 seeds, where the contact and damping terms cancel; `momentum_paper.rs` allows 1e-12
+/// on the paper scene).
+const MOMENTUM_BALANCE: f64 = 5e-11;
+
+/// Impacts are computed in closed form: contact energy never negative and zero at c_r = 1,
+/// and the achieved restitution c_r, to round-off (relative to the energy scale, and
+/// absolute for the restitution; measured up to 3.5e-15 over 1000 seeds).
+const IMPACT_ROUNDOFF: f64 = 1e-12;
+
+/// The achieved restitution −v⁺/v⁻ is a ratio of modal sums much larger than a slow approach
+/// speed v⁻: its round-off grows as 1/v⁻ (measured up to 1.1e-12 over 1000 seeds).
+const RESTITUTION_ROUNDOFF: f64 = 1e-10;
+
+/// The energy audits and impact books of the momentum and impulse methods. Catches a lost or
+/// double-counted work term, an impulse that creates energy or misses c_r, and, for the
+/// impulse method, a balance that does not follow its tolerance.
+#[test]
+fn energy_audits_close() {
+    sweep("energy", |c| {
+        let mut values = vec![];
+        let mut impulse_balance = [0.0; 2];
+        for (method, tol) in [
+            (Method::Momentum, TOL_FINE),
+            (Method::Impulse, TOL_COARSE),
+            (Method::Impulse, TOL_FINE),
+        ] {
+            let mut s = c.scene.clone();
+            s.gap_element.tolerance = tol;
+            let out = match solvers::run(&s, method, None) {
+                Ok(o) => o,
+                Err(e) => return Verdict::Skip(format!("{method}: {}", kind(&e))),
+            };
+            let e = &out.energy;
+            let scale = e.input.abs().max(e.initial).max(e.damping);
+            let balance = e.balance_error.abs() / scale;
+            let gained = -e.contact / scale;
+            let elastic = s.contacts.iter().all(|c| c.restitution == 1.0);
+            let lost = if elastic {
+                e.contact.abs() / scale
+            } else {
+                0.0
+            };
+            let restitution = out
+                .impacts
+                .iter()
+                .filter(|i| !i.achieved_restitution.is_nan())
+                .map(|i| (i.achieved_restitution - s.contacts[i.contact].restitution).abs())
+                .fold(0.0, f64::max);
+            if verbose() {
+                eprintln!(
+                    "seed {} {method} {tol:e}: impacts {} held {} balance {balance:.3e} gained {gained:.3e} lost {lost:.3e} restitution {restitution:.3e}",
+                    c.seed,
+                    out.impacts.len(),
+                    out.persistent_contacts.len()
+                );
+            }
+            let what = format!("{method} (tol {tol:e}): ");
+            if !(gained <= IMPACT_ROUNDOFF && lost <= IMPACT_ROUNDOFF) {
+                return Verdict::Fail(format!(
+                    "{what}contact energy {:.6e} J of a scale {scale:.6e} J",
+                    e.contact
+                ));
+            }
+            if !(restitution <= RESTITUTION_ROUNDOFF) {
+                return Verdict::Fail(format!(
+                    "{what}achieved restitution off c_r by {restitution:.3e}"
+                ));
+            }
+            if method == Method::Momentum {
+                if !(balance <= MOMENTUM_BALANCE) {
+                    return Verdict::Fail(format!(
+                        "{what}balance error {balance:.3e} of {scale:.6e} J"
+                    ));
+                }
+                values.push(("momentum: balance", balance));
+                values.push(("momentum: -contact, |contact| at c_r = 1", gained.max(lost)));
+                values.push(("momentum: |achieved - c_r|", restitution));
+            } else {
+                impulse_balance[usize::from(tol == TOL_FINE)] = balance;
+                values.push(("impulse: -contact, |contact| at c_r = 1", gained.max(lost)));
+                values.push(("impulse: |achieved - c_r|", restitution));
+            }
+        }
+        let [coarse, fine] = impulse_balance;
+        values.push(("impulse: balance at the fine tolerance", fine));
+        if fine > IMPULSE_FLOOR {
+            values.push((
+                "impulse: fine / coarse balance (above floor)",
+                fine / coarse,
+            ));
+            if fine > coarse / 10.0 {
+                return Verdict::Fail(format!(
+                    "impulse: balance error {coarse:.3e} at tol {TOL_COARSE:e}, {fine:.3e} at \
+                     {TOL_FINE:e}: it does not follow the tolerance"
+                ));
+            }
+        }
+        Verdict::Pass(values)
+    });
+}
+
+/// Newmark's step in the comparison with the adaptive gap element, s.
+const NEWMARK_STEP: f64 = 1e-4;
+
+/// Largest relative peak difference between Newmark at `NEWMARK_STEP` and the adaptive
+/// integrator at tol 1e-10 on the same spring model (Kelvin–Voigt, k = 1e10 N/m). Newmark
+/// with contact is not second order here: a closure or opening inside a step (where the
+/// dashpot force jumps) costs O(Δt), and its peaks are sampled at the steps; in chaotic
+/// pounding the difference does not even fall monotonically with Δt (seed 6: 2.4e-2, 4.3e-3,
+/// 5.2e-3, 8.6e-4, 9.3e-4 at Δt = 4e-4 … 2.5e-5 s). Measured up to 0.22 (seed 843) over 1000
+/// seeds with the same number of contact episodes; the bound catches a grossly wrong contact
+/// law, stiffness, damping or mass in one integrator, not a small drift.
+const NEWMARK_PEAKS: f64 = 0.5;
+
+/// The gap element: adaptive (tol 1e-10) and Newmark (`NEWMARK_STEP`) integrate the same
+/// spring model. Neither may panic (an error must be a typed `SolverError`, counted); both
+/// must close their energy balance (Newmark to round-off: 16ε per step, as `gap_energy.rs`
+/// states; the adaptive integrator's must follow its tolerance: at least 10 times smaller at
+/// tol 1e-10 than at 1e-8, measured 14 to 100 times, up to 150 × tol in size); their
+/// peaks must agree to `NEWMARK_PEAKS` when their contact episodes agree in number
+/// (near-grazing contacts switch on or off between the integrators: counted, skipped).
+#[test]
+fn gap_element_integrators_agree() {
+    sweep("gap", |c| {
+        let mut ad = c.scene.clone();
+        ad.gap_element.tolerance = 1e-10;
+        let mut loose = c.scene.clone();
+        loose.gap_element.tolerance = 1e-8;
+        let mut nm = c.scene.clone();
+        nm.gap_element.integrator = structure::scene::Integrator::Newmark;
+        nm.gap_element.time_step = NEWMARK_STEP;
+        let (a, b) = match (
+            solvers::run(&ad, Method::Gap, None),
+            solvers::run(&nm, Method::Gap, None),
+        ) {
+            (Ok(a), Ok(b)) => (a, b),
+            (a, b) => {
+                return Verdict::Skip(format!(
+                    "adaptive {} / newmark {}",
+                    a.err().map_or("Ok", |e| kind(&e)),
+                    b.err().map_or("Ok", |e| kind(&e))
+                ))
+            }
+        };
+        let balance = |o: &RunOutput| {
+            let e = &o.energy;
+            e.balance_error.abs() / e.input.abs().max(e.damping).max(e.initial)
+        };
+        let (ba, bn) = (balance(&a), balance(&b));
+        let steps = (c.scene.duration / NEWMARK_STEP).ceil();
+        let bl = match solvers::run(&loose, Method::Gap, None) {
+            Ok(o) => balance(&o),
+            Err(e) => return Verdict::Skip(format!("adaptive at tol 1e-8: {}", kind(&e))),
+        };
+        // The balance's terms are integrated with the motion: its error follows the
+        // tolerance (20 to 100 times smaller at a 100 times tighter one measured, 10 asked),
+        // whatever the scene's constant (up to 150 × tol measured here).
+        if ba > 1e-12 && ba > bl / 10.0 {
+            return Verdict::Fail(format!(
+                "adaptive gap element: balance error {bl:.3e} at tol 1e-8, {ba:.3e} at 1e-10"
+            ));
+        }
+        if !(bn <= 16.0 * f64::EPSILON * steps) {
+            return Verdict::Fail(format!(
+                "Newmark: balance error {bn:.3e} over {steps} steps (16ε per step: {:.3e})",
+                16.0 * f64::EPSILON * steps
+            ));
+        }
+        let (d, at) = peak_diff(&a, &b);
+        if verbose() {
+            eprintln!(
+                "seed {}: episodes {}/{} peaks {d:.3e} ({at}); balance {ba:.3e} / {bn:.3e}; \
+                 adaptive {:.3} s, newmark {:.3} s",
+                c.seed,
+                a.impacts.len(),
+                b.impacts.len(),
+                a.stats.wall_seconds,
+                b.stats.wall_seconds
+            );
+        }
+        let mut v = vec![
+            ("adaptive balance at tol 1e-10", ba),
+            ("adaptive balance 1e-10 / 1e-8", ba / bl),
+            (
+                "newmark balance / (16 eps steps)",
+                bn / (16.0 * f64::EPSILON * steps),
+            ),
+        ];
+        if a.impacts.len() != b.impacts.len() {
+            v.push(("peaks with different episode counts (not asserted)", d));
+            return Verdict::Pass(v);
+        }
+        if !(d <= NEWMARK_PEAKS) {
+            return Verdict::Fail(format!(
+                "Newmark at {NEWMARK_STEP:e} s and the adaptive integrator: peaks differ by {d:.3e} ({at})"
+            ));
+        }
+        v.push(("peaks", d));
+        Verdict::Pass(v)
+    });
+}
+
+/// A momentum run whose segments stop advancing time ends at once with `Stalled`, naming the
+/// instant, instead of spinning until `analysis.max_steps`: seed 651 on its record refined 4×
+/// (the one stall left in the 1000-seed sweep, a held phase; see the module docs). Until the
+/// re-arming fix of this release the aligned paper pair with 10 modes at c_r = 0.1 was this
+/// test's case (`momentum_robust.rs`); it now goes on and ends in an event storm.
+#[test]
+fn a_run_that_stops_advancing_time_stalls_with_a_reason() {
+    let case = draw(651);
+    let s = refine(&case.scene, 4);
+    match solvers::run(&s, Method::Momentum, None) {
+        Err(SolverError::Stalled { time, reason }) => {
+            assert!(time > 0.0 && time < s.duration, "t = {time}");
+            assert!(reason.contains("time advanced less than"), "{reason}");
+        }
+        other => panic!(
+            "seed 651, record refined 4x: expected Stalled, got {:?}\n{}",
+            other.map(|o| o.stats),
+            case.what
+        ),
+    }
+}
+
+#[test]
+fn splitmix64_reproduces_the_reference_stream() {
+    // Vigna's splitmix64.c seeded with 1234567.
+    let mut r = SplitMix64::new(1234567);
+    assert_eq!(r.next_u64(), 6457827717110365317);
+    assert_eq!(r.next_u64(), 3203168211198807973);
+    assert_eq!(r.next_u64(), 9817491932198370423);
+}
