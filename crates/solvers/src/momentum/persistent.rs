@@ -22,8 +22,8 @@
 //! release leaves the floors touching at rest, not drifting together. A segment cut short by
 //! another contact's closure leaves the held gaps open (the forces close them at the planned
 //! end only): they are closed by the least modal displacement
-//! ([`Stepper::close_held_gaps`]), and a held phase that did work on the buildings stops the
-//! run ([`Stepper::check_contact_account`]).
+//! (`Stepper::close_held_gaps`), and a held phase that did work on the buildings stops the
+//! run (`Stepper::check_contact_account`).
 
 use super::impulse::{self, solve_checked, ContactGeom};
 use super::modal::{Arc, Modal};

@@ -74,7 +74,7 @@ pub struct Diagnostics {
     pub building_samples: u64,
     pub building_samples_skipped: u64,
     pub overlap_audits_skipped: u64,
-    /// Held-gap projections beyond the round-off band ([`Stepper::project_held`]): held
+    /// Held-gap projections beyond the round-off band (`Stepper::close_held_gaps`): held
     /// segments cut by another contact's closure.
     pub gap_projections: u64,
 }
