@@ -83,7 +83,8 @@ pub struct PersistentContact {
     /// Start and end of the phase, s (end = analysis end if still in contact).
     pub start: f64,
     pub end: f64,
-    /// Why it ended: "tension" (contact force would turn tensile) or "end of analysis".
+    /// Why it ended: "tension" (contact force would turn tensile), "impact" (an impact at
+    /// another contact pulled the floors apart) or "end of analysis".
     pub released_by: String,
 }
 

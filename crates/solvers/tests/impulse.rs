@@ -142,25 +142,25 @@ fn persistent_scene(k: usize, tol: f64) -> Scene {
 }
 
 #[test]
-fn persistent_contact_converges_to_the_momentum_method_as_its_segments_shrink() {
+fn persistent_contact_converges_to_the_momentum_method_as_its_held_tolerance_falls() {
     // With c_r < 1 the chattering sequences end in persistent contact. The momentum method
-    // holds the floors over each base step h (the record step) with a constant force that
-    // closes the gap at the step end; this method uses the exact instantaneous force. The
-    // held motions then differ by the momentum method's discretisation of λ, so the
-    // difference must fall as its step shrinks (the record refined 1, 2, 4 times, the
-    // ground motion unchanged), with the same impacts and phases throughout.
+    // holds the floors with a constant force per held segment, its segments shortened until
+    // the held gap strays at most momentum.held_tolerance (of the gap) inside them; this
+    // method uses the exact instantaneous force. The difference must fall with that
+    // tolerance, with the same impacts and phases throughout.
     let mut rows = vec![];
-    for k in [1, 2, 4] {
-        let scene = persistent_scene(k, 1e-11);
+    for tol in [1e-5, 1e-6, 1e-7] {
+        let mut scene = persistent_scene(1, 1e-11);
+        scene.momentum.held_tolerance = tol;
         let mom = momentum::solve(&scene, None).unwrap();
         let imp = impulse::solve(&scene, None).unwrap();
         assert!(!mom.persistent_contacts.is_empty());
         assert_eq!(
             mom.persistent_contacts.len(),
             imp.persistent_contacts.len(),
-            "k = {k}"
+            "held_tolerance {tol}"
         );
-        assert_eq!(mom.impacts.len(), imp.impacts.len(), "k = {k}");
+        assert_eq!(mom.impacts.len(), imp.impacts.len(), "held_tolerance {tol}");
         let release = mom
             .persistent_contacts
             .iter()
@@ -168,25 +168,25 @@ fn persistent_contact_converges_to_the_momentum_method_as_its_segments_shrink() 
             .map(|(a, b)| (a.end - b.end).abs())
             .fold(0.0, f64::max);
         rows.push((
-            k,
+            tol,
             peak_diff(&mom, &imp),
             release,
             impact_diffs(&mom, &imp).0,
         ));
     }
-    eprintln!("(refinement, peaks, release times, impact times): {rows:?}");
-    // The constant force matches the mean holding force over a step to O(h²), so every
-    // difference must fall at least as h² (a factor 4 per halving; margin to 3.5). Measured:
-    // peaks and impact times about 8 per halving, release times about 5.
+    eprintln!("(held_tolerance, peaks, release times, impact times): {rows:?}");
+    // Every difference must fall at least 4 times per decade of the tolerance. Measured:
+    // peaks 2.2e-6, 1.8e-7, 2.9e-8 (12 and 6 per decade), release times 4.2e-5, 7.9e-6,
+    // 1.4e-6 (5.3 and 5.5), impact times 1.1e-6, 9.3e-8, 9.2e-9 (12 and 10).
     for w in rows.windows(2) {
-        let ((_, p0, r0, t0), (k1, p1, r1, t1)) = (w[0], w[1]);
+        let ((_, p0, r0, t0), (tol, p1, r1, t1)) = (w[0], w[1]);
         assert!(
-            p0 / p1 > 3.5 && r0 / r1 > 3.5 && t0 / t1 > 3.5,
-            "refinement {k1}: {rows:?}"
+            p0 / p1 > 4.0 && r0 / r1 > 4.0 && t0 / t1 > 4.0,
+            "held_tolerance {tol}: {rows:?}"
         );
     }
-    // On the record's own grid (h = 5 ms) the peaks already agree to 1e-5.
-    assert!(rows[0].1 < 1e-5, "{rows:?}");
+    // At the default tolerance (1e-6) the peaks agree to 1e-6.
+    assert!(rows[1].1 < 1e-6, "{rows:?}");
 }
 
 // --- a floor against a rigid wall (closed forms, see tests/wall.rs) -----------------------

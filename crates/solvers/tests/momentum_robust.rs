@@ -61,16 +61,19 @@ fn near_field_persistent_contact_finishes() {
 /// faster than the pair, so the holding force λ = (k2 − m2 Ω²) u is compressive while u > 0
 /// and turns tensile at t = π/Ω, when u returns to 0. The release is located there up to
 /// the discretisation error of the held trajectory (the holding force is constant over each
-/// step), which falls as Δt⁴: relative errors 1.3e-9, 8.0e-11 and 5.0e-12 at Δt = 4, 2 and
-/// 1 ms (halving ratios 16.2 and 16.0).
+/// held segment, the segments as long as `momentum.held_tolerance` allows), which falls with
+/// that tolerance. (Before the tolerance, held segments were the record step and the error
+/// fell as Δt⁴: 1.3e-9, 8.0e-11 and 5.0e-12 at Δt = 4, 2 and 1 ms.)
 #[test]
 fn plastic_pair_releases_where_the_holding_force_turns_tensile() {
     let (m1, k1, m2, k2): (f64, f64, f64, f64) = (1.0e5, 4.0e6, 1.0e5, 1.6e7);
     let big_omega = ((k1 + k2) / (m1 + m2)).sqrt();
     let t_release = std::f64::consts::PI / big_omega;
     let mut errs = Vec::new();
-    for dt in [4e-3, 2e-3, 1e-3] {
+    for tol in [1e-4, 1e-6, 1e-8] {
+        let dt = 4e-3;
         let mut s = two_oscillators(m1, k1, m2, k2, 0.5, 0.0, 0.0, 1.5);
+        s.momentum.held_tolerance = tol;
         s.ground = Some(GroundMotion {
             name: "zero".into(),
             dt,
@@ -90,17 +93,18 @@ fn plastic_pair_releases_where_the_holding_force_turns_tensile() {
         let e = &out.energy;
         assert!(e.balance_error.abs() < 1e-12 * e.initial, "{e:?}");
     }
-    // Order about 4 on halving Δt: each ratio in [10, 25] (order 3.3–4.6) refuses order 3
-    // (8) and 5 (32) and a floor that stops converging (1).
+    // The error falls with the tolerance: measured 1.3e-9, 3.6e-11 and 7.4e-13 at 1e-4, 1e-6
+    // and 1e-8 (36 and 48 per two decades; the decades between give 9.9, 3.6, 16 and 3.0).
+    // Each two-decade ratio in [15, 500] refuses a floor that stops converging.
     for w in errs.windows(2) {
         let ratio = w[0] / w[1];
         assert!(
-            (10.0..=25.0).contains(&ratio),
-            "release-time errors {errs:?}: ratio {ratio:.1} is not order 4"
+            (15.0..=500.0).contains(&ratio),
+            "release-time errors {errs:?}: ratio {ratio:.1} per two decades of held_tolerance"
         );
     }
-    // The finest grid to a tenth of the measured 5.0e-12 margin (bound 5e-11 = 10×).
-    assert!(errs[2] < 5e-11, "release-time errors {errs:?}");
+    // The tightest tolerance to 7 times its measured error.
+    assert!(errs[2] < 5e-12, "release-time errors {errs:?}");
 }
 
 /// A contact found closed while its floors separate is not an impact: no impulse, no
@@ -189,45 +193,42 @@ fn stiff_neighbour_at_cr_0_8_finishes() {
 
 /// Runs whose steps stop advancing time end at once with `Stalled` naming the instant, where
 /// they used to spin for minutes until `analysis.max_steps` and report a spent budget: the
-/// impulse method with a yield shear of 1 N (stuck in its kink search). The momentum method on
-/// the aligned pair with 10 modes at c_r = 0.1 was stuck at t = 9.574 s; since closures are
-/// located at δ = 0 after a re-arming inside a segment it goes on to 9.61 s, where contact 2
-/// keeps impacting and the impact-rate guard stops it (a typed `EventStorm`, checked here). The
-/// momentum method's own stall is checked in `random_scenes.rs`
+/// impulse method with a yield shear of 1 N (stuck in its kink search). The momentum method's
+/// own stall is checked in `random_scenes.rs`
 /// (`a_run_that_stops_advancing_time_stalls_with_a_reason`).
 #[test]
 fn runs_that_stop_advancing_time_stall_with_a_reason() {
-    let cases = [
-        (
-            solvers::Method::Momentum,
-            vec!["momentum.modes=10", "contacts.0.restitution=0.1"],
-        ),
-        (
-            solvers::Method::Impulse,
-            vec![
-                "buildings.1.story_law=bilinear",
-                "buildings.1.yield_shear=1",
-                "buildings.1.hardening_ratio=0.999",
-            ],
-        ),
+    let over = [
+        "buildings.1.story_law=bilinear",
+        "buildings.1.yield_shear=1",
+        "buildings.1.hardening_ratio=0.999",
     ];
-    for (method, over) in cases {
-        let s = structure::testing::paper_scene_aligned(&over);
-        match solvers::run(&s, method, None) {
-            Err(solvers::SolverError::Stalled { time, reason }) => {
-                assert!(time > 0.0 && time < s.duration, "{method}: t = {time}");
-                assert!(reason.contains("time advanced less than"), "{reason}");
-            }
-            Err(solvers::SolverError::EventStorm { time, context, .. })
-                if method == solvers::Method::Momentum =>
-            {
-                assert!(time > 9.574 && time < s.duration, "{method}: t = {time}");
-                assert!(context.contains("keeps impacting"), "{context}");
-            }
-            other => panic!(
-                "{method} {over:?}: expected Stalled, got {:?}",
-                other.map(|o| o.stats)
-            ),
+    let s = structure::testing::paper_scene_aligned(&over);
+    match solvers::run(&s, solvers::Method::Impulse, None) {
+        Err(solvers::SolverError::Stalled { time, reason }) => {
+            assert!(time > 0.0 && time < s.duration, "t = {time}");
+            assert!(reason.contains("time advanced less than"), "{reason}");
         }
+        other => panic!(
+            "impulse {over:?}: expected Stalled, got {:?}",
+            other.map(|o| o.stats)
+        ),
     }
+}
+
+/// The aligned pair with 10 modes at c_r = 0.1 (a contact at every facing floor) was this
+/// method's stall at t = 9.574 s; with closures located at δ = 0 after a re-arming inside a
+/// segment it went on to 9.61 s and stopped in an event storm (contact 2 impacting against
+/// held neighbours, each impact followed by a projection of the held contacts that made it
+/// approach again). With the held contacts taking part in the impact (one LCP) and held
+/// segments kept within `momentum.held_tolerance`, it runs to the end with its books closed.
+#[test]
+fn aligned_pair_with_chattering_and_held_neighbours_runs_to_the_end() {
+    let s = structure::testing::paper_scene_aligned(&[
+        "momentum.modes=10",
+        "contacts.0.restitution=0.1",
+    ]);
+    let out = solve(&s, None).unwrap();
+    assert_sound(&out);
+    assert!(!out.persistent_contacts.is_empty());
 }

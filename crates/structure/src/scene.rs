@@ -73,6 +73,10 @@ pub struct MomentumOptions {
     /// Approach speed, m/s, below which a contact that keeps closing is captured into a
     /// persistent-contact phase (default 1e-4 m/s).
     pub capture_velocity: f64,
+    /// How far a held gap may stray inside a held segment of a persistent-contact phase,
+    /// relative to max(gap, 1 mm) (default 1e-6): the holding forces are constant over a
+    /// segment, and a segment is shortened until its gaps stray no further at its middle.
+    pub held_tolerance: f64,
 }
 
 impl Default for MomentumOptions {
@@ -82,6 +86,7 @@ impl Default for MomentumOptions {
             impulse: ImpulseVariant::Consistent,
             persistent_contact: true,
             capture_velocity: 1e-4,
+            held_tolerance: 1e-6,
         }
     }
 }
@@ -469,13 +474,14 @@ struct RawAnalysis {
 #[derive(Deserialize, Default)]
 #[serde(
     deny_unknown_fields,
-    expecting = "a momentum table with keys modes, impulse, persistent_contact, capture_velocity"
+    expecting = "a momentum table with keys modes, impulse, persistent_contact, capture_velocity, held_tolerance"
 )]
 struct RawMomentum {
     modes: Option<i64>,
     impulse: Option<ImpulseVariant>,
     persistent_contact: Option<bool>,
     capture_velocity: Option<f64>,
+    held_tolerance: Option<f64>,
 }
 
 #[derive(Deserialize, Default)]
@@ -1596,6 +1602,15 @@ fn validate(
             ));
         }
         momentum.capture_velocity = v;
+    }
+    if let Some(v) = raw.momentum.held_tolerance {
+        if !(v.is_finite() && v > 0.0 && v <= 1e-2) {
+            return Err(invalid(
+                "momentum.held_tolerance".into(),
+                format!("{v}: expected a relative tolerance > 0 and <= 1e-2 (of max(gap, 1 mm))"),
+            ));
+        }
+        momentum.held_tolerance = v;
     }
 
     let mut gap = GapElementOptions::default();

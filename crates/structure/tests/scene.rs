@@ -288,6 +288,7 @@ fn documented_defaults() {
     assert_eq!(s.momentum.impulse, ImpulseVariant::Consistent);
     assert!(s.momentum.persistent_contact);
     assert_eq!(s.momentum.capture_velocity, 1e-4);
+    assert_eq!(s.momentum.held_tolerance, 1e-6);
 
     assert_eq!(s.gap_element.stiffness, 1.0e10);
     assert_eq!(s.gap_element.law, ContactLaw::KelvinVoigt);
@@ -400,6 +401,14 @@ fn validation_errors_name_the_key() {
         ("analysis.duration=0", &["analysis.duration", "> 0"]),
         ("analysis.duration=-1", &["analysis.duration", "> 0"]),
         ("momentum.modes=0", &["momentum.modes", ">= 1"]),
+        (
+            "momentum.held_tolerance=0",
+            &["momentum.held_tolerance", "> 0 and <= 1e-2"],
+        ),
+        (
+            "momentum.held_tolerance=0.1",
+            &["momentum.held_tolerance", "> 0 and <= 1e-2"],
+        ),
         ("gap_element.stiffness=0", &["gap_element.stiffness", "> 0"]),
         (
             "gap_element.tolerance=0.1",
@@ -699,6 +708,7 @@ const PATHS: &[&str] = &[
     "momentum.modes",
     "momentum.impulse",
     "momentum.capture_velocity",
+    "momentum.held_tolerance",
     "gap_element.stiffness",
     "gap_element.law",
     "gap_element.tolerance",

@@ -443,6 +443,7 @@ pub fn resolved_scene(scene: &Scene) -> serde_json::Value {
             "impulse": to_json(m.impulse),
             "persistent_contact": m.persistent_contact,
             "capture_velocity": m.capture_velocity,
+            "held_tolerance": m.held_tolerance,
         },
         "gap_element": {
             "stiffness": g.stiffness,

@@ -156,6 +156,14 @@ impl ImpulseStepper<'_> {
 
     /// Ends the persistent phase of `contact` now (its holding force turned tensile).
     pub(super) fn release(&mut self, contact: usize) -> Result<(), SolverError> {
+        self.end_phase(contact, "tension");
+        self.stats.events += 1;
+        self.held_changed()
+    }
+
+    /// Removes `contact` from the held set and records its phase, ended by `why` (the
+    /// caller updates the held set's Delassus inverse).
+    pub(super) fn end_phase(&mut self, contact: usize, why: &str) {
         let t = self.s.t;
         if let Some(i) = self.s.held.set.iter().position(|&c| c == contact) {
             self.s.held.set.remove(i);
@@ -165,12 +173,10 @@ impl ImpulseStepper<'_> {
                     contact,
                     start,
                     end: t,
-                    released_by: "tension".into(),
+                    released_by: why.into(),
                 });
             }
         }
         self.s.grazing[contact] = true;
-        self.stats.events += 1;
-        self.held_changed()
     }
 }

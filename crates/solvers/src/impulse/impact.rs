@@ -128,7 +128,18 @@ impl ImpulseStepper<'_> {
                 (1.0 + e) * v.max(0.0)
             })
             .collect();
-        let imp = impulse::lcp_impulses(&self.p.geoms, contacts, &target, t)?;
+        // The held contacts take part as perfectly plastic participants, as in the momentum
+        // method (`momentum::Stepper::impact`, `with_held`): one LCP, not an impact followed
+        // by a projection that makes the impacting contact approach again.
+        let mut set = contacts.to_vec();
+        let mut target = target;
+        for &c in &self.s.held.set {
+            if !set.contains(&c) {
+                set.push(c);
+                target.push(self.rel_velocity(c).max(0.0));
+            }
+        }
+        let imp = impulse::lcp_impulses(&self.p.geoms, &set, &target, t)?;
         self.contact_loss += self.apply_impulses(&imp);
         for (k, &c) in contacts.iter().enumerate() {
             let vb = v_before[k];
@@ -163,6 +174,19 @@ impl ImpulseStepper<'_> {
                 time: t,
                 context: "floor velocities after an impulse".into(),
             });
+        }
+        // Held contacts the impact pulled apart leave the held set.
+        let apart: Vec<usize> = self
+            .s
+            .held
+            .set
+            .iter()
+            .copied()
+            .filter(|&c| self.rel_velocity(c) < -cfg.capture_velocity)
+            .collect();
+        for c in apart {
+            self.end_phase(c, "impact");
+            *set_changed = true;
         }
         Ok(())
     }

@@ -77,6 +77,13 @@ pub struct Diagnostics {
     /// Held-gap projections beyond the round-off band (`Stepper::close_held_gaps`): held
     /// segments cut by another contact's closure.
     pub gap_projections: u64,
+    /// The largest |δ| / `pen` of a contact at an impact it takes part in: the closure search
+    /// resolves an impact where the gap is 0 (or `pen`, not yet re-armed), so this stays at
+    /// most 1 plus round-off; a larger value is an impact resolved away from the contact
+    /// surface (floors through each other, or apart).
+    pub impact_gap_ratio: f64,
+    /// Held segments shortened for accuracy (`momentum.held_tolerance`).
+    pub held_subdivisions: u64,
 }
 
 /// Advances the state one segment at a time; owns the accumulated results.
@@ -99,6 +106,9 @@ pub struct Stepper<'a> {
     /// beyond −`pen`: a contact left touching at rest is not found closing again and again
     /// at the same state by round-off.
     pub(super) grazing: Vec<bool>,
+    /// The longest held segment (s) while a touching contact keeps being found closing at
+    /// the start of held segments (`Stepper::persistent_segment`); `None`: no cap.
+    pub(super) held_cap: Option<f64>,
     /// Round-off band of each gap, m: 1e-9 · max(gap, 1 mm).
     pub(super) pen: Vec<f64>,
     pub(super) xn: Vec<f64>,
@@ -349,6 +359,7 @@ impl<'a> Stepper<'a> {
             guard: ImpactRateGuard::new(p.limits.max_impact_rate),
             last_impacts: vec![VecDeque::new(); p.contacts.len()],
             grazing: vec![false; p.contacts.len()],
+            held_cap: None,
             pen: p.contacts.iter().map(|c| 1e-9 * c.gap.max(1e-3)).collect(),
             xn: vec![0.0; nm],
             vn: vec![0.0; nm],
@@ -1083,6 +1094,8 @@ impl<'a> Stepper<'a> {
         let tol = 2.0 * f64::EPSILON * (self.s.t + tau) + 1e-300;
         let mut first: Option<f64> = None;
         let mut found: Vec<(usize, f64)> = vec![];
+        // Contacts re-armed at a window end without closing after it, and where.
+        let mut rearmed: Vec<(usize, f64)> = vec![];
         for (ci, ct) in p.contacts.iter().enumerate() {
             if self.s.persistent.iter().any(|&(c, _)| c == ci) {
                 continue;
@@ -1151,11 +1164,20 @@ impl<'a> Stepper<'a> {
                     // Opened beyond −pen at this window end: re-armed from here on.
                     prev.0 += shift;
                     shift = 0.0;
+                    rearmed.push((ci, hi));
                 }
             }
             if let Some(s) = r {
                 found.push((ci, s));
                 first = Some(first.map_or(s, |f: f64| f.min(s)));
+            }
+        }
+        // The re-arming outlives the segment if it came before its end (the first closure or
+        // τ): a gap that opened beyond −pen and is back inside the band at the end is then
+        // searched at δ = 0 by the next segment, not at δ = pen.
+        for (ci, s) in rearmed {
+            if first.is_none_or(|f| s <= f) {
+                self.grazing[ci] = false;
             }
         }
         (first, found, end_ready)
@@ -1230,10 +1252,10 @@ impl<'a> Stepper<'a> {
         )
     }
 
-    /// Held contacts and impacts can only remove energy: a contact account below
-    /// −[`AUDIT_TOLERANCE`] of the energy scale (initial + |input| so far + present energy)
-    /// means a held phase went wrong, and the run stops there, saying so, instead of
-    /// returning garbage.
+    /// Held contacts and impacts can only remove energy: a contact account (the running
+    /// total, not one phase's part) below −[`AUDIT_TOLERANCE`] of the energy scale (initial +
+    /// |input| so far + present energy) means a held phase went wrong, and the run stops
+    /// there, saying so, instead of returning garbage.
     pub(super) fn check_contact_account(&self) -> Result<(), SolverError> {
         let e = &self.energy;
         let input = e.input + self.fast_works().0;
