@@ -835,7 +835,8 @@ const RESTITUTION_ROUNDOFF: f64 = 1e-10;
 /// An impact is resolved where its closure was located: δ = 0, or δ = `pen` (1e-9 of the
 /// gap, at least 1e-12 m) while the contact is not yet re-armed, so |δ| / pen is at most 1
 /// plus the root finder's tolerance (2ε·t in time, far below pen / v). Caught the held-gap
-/// projection that moved the closing contact too (measured up to … before, … now).
+/// projection that moved the closing contact too (measured: at most 1.000 over 1000 seeds;
+/// without the fix 1.7e3 to 2.0e8 on 32 of them).
 const IMPACT_GAP_RATIO: f64 = 1.01;
 
 /// The energy audits and impact books of the momentum and impulse methods. Catches a lost or

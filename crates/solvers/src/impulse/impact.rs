@@ -133,12 +133,8 @@ impl ImpulseStepper<'_> {
         // by a projection that makes the impacting contact approach again.
         let mut set = contacts.to_vec();
         let mut target = target;
-        for &c in &self.s.held.set {
-            if !set.contains(&c) {
-                set.push(c);
-                target.push(self.rel_velocity(c).max(0.0));
-            }
-        }
+        let held = self.s.held.set.iter().copied();
+        impulse::add_plastic(&mut set, &mut target, held, |c| self.rel_velocity(c));
         let imp = impulse::lcp_impulses(&self.p.geoms, &set, &target, t)?;
         self.contact_loss += self.apply_impulses(&imp);
         for (k, &c) in contacts.iter().enumerate() {

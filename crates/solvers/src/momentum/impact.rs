@@ -267,12 +267,8 @@ impl Stepper<'_> {
     /// to be cancelled by its constant forces, of order m·δ̇/τ: 1e14 N over the slivers of a
     /// contact rattling against held neighbours (seed 1204).
     fn with_held(&self, set: &mut Vec<usize>, target: &mut Vec<f64>) {
-        for &(c, _) in &self.s.persistent {
-            if !set.contains(&c) {
-                set.push(c);
-                target.push(self.p.contacts[c].dot(&self.s.v).max(0.0));
-            }
-        }
+        let held = self.s.persistent.iter().map(|&(c, _)| c);
+        impulse::add_plastic(set, target, held, |c| self.p.contacts[c].dot(&self.s.v));
     }
 
     /// Ends the held phase of the contacts an impact has pulled apart (separating faster than
@@ -324,10 +320,13 @@ impl Stepper<'_> {
         keep: &[usize],
     ) -> Result<(), SolverError> {
         let p = self.p;
-        let before: Vec<f64> = p.contacts.iter().map(|c| c.delta(&self.s.x)).collect();
-        if set.iter().all(|&c| before[c].abs() <= self.pen[c]) {
+        if set
+            .iter()
+            .all(|&c| p.contacts[c].delta(&self.s.x).abs() <= self.pen[c])
+        {
             return Ok(());
         }
+        let before: Vec<f64> = p.contacts.iter().map(|c| c.delta(&self.s.x)).collect();
         let mut all: Vec<usize> = set.to_vec();
         all.extend(keep.iter().copied().filter(|c| !set.contains(c)));
         let e0 = p.modal.energy(&self.s.x, &self.s.v);

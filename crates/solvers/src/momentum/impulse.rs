@@ -174,6 +174,23 @@ pub fn solve_delassus(
     })
 }
 
+/// Adds the contacts `held` (those not already in `set`) to an impact's LCP as perfectly
+/// plastic participants: target v⁺ = 0 where they approach (`approach(c)` > 0, m/s), no
+/// impulse otherwise. Shared by the momentum and impulse methods (`Stepper::impact`).
+pub fn add_plastic(
+    set: &mut Vec<usize>,
+    target: &mut Vec<f64>,
+    held: impl IntoIterator<Item = usize>,
+    approach: impl Fn(usize) -> f64,
+) {
+    for c in held {
+        if !set.contains(&c) {
+            set.push(c);
+            target.push(approach(c).max(0.0));
+        }
+    }
+}
+
 /// Non-negative impulses P on `set` with W P = target on the retained contacts (the
 /// others get P = 0): solve, drop the most negative, repeat. Returns (contact, P) pairs.
 pub fn lcp_impulses(

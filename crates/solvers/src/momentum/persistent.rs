@@ -110,7 +110,8 @@ pub(super) struct HeldTrial {
     pub loads: Vec<f64>,
     pub x: Vec<f64>,
     pub v: Vec<f64>,
-    /// The modal displacements at s/2.
+    /// The modal displacements at s/2, when asked for (`held_accurate_length`; empty
+    /// otherwise: the release search does not need them).
     pub mid: Vec<f64>,
     pub forces: Vec<f64>,
 }
@@ -151,7 +152,12 @@ impl Stepper<'_> {
 
     /// The held trajectory over [0, s] from the current state: constant forces that bring
     /// every held gap back to δ = 0 at s (see [`persistent`]).
-    pub(super) fn held_trial(&self, set: &[usize], s: f64) -> Result<HeldTrial, SolverError> {
+    pub(super) fn held_trial(
+        &self,
+        set: &[usize],
+        s: f64,
+        with_mid: bool,
+    ) -> Result<HeldTrial, SolverError> {
         let (p, m) = (self.p, &self.p.modal);
         let (a0, a1) = (
             p.ground(self.s.j, self.s.t),
@@ -180,11 +186,13 @@ impl Stepper<'_> {
             }
         }
         let (mut x, mut v) = (vec![0.0; m.len()], vec![0.0; m.len()]);
-        let mut mid = vec![0.0; m.len()];
+        let mut mid = Vec::with_capacity(if with_mid { m.len() } else { 0 });
         for n in 0..m.len() {
             let a = arc(n, fc[n]);
             (x[n], v[n]) = a.xv(s);
-            mid[n] = a.xv(0.5 * s).0;
+            if with_mid {
+                mid.push(a.xv(0.5 * s).0);
+            }
         }
         Ok(HeldTrial {
             loads: fc,
@@ -203,7 +211,7 @@ impl Stepper<'_> {
         s: f64,
     ) -> Result<(f64, usize), SolverError> {
         if s > 0.0 {
-            let t = self.held_trial(set, s)?;
+            let t = self.held_trial(set, s, false)?;
             self.force_at(set, s, &t.x, &t.v)
         } else {
             self.force_at(set, s, &self.s.x, &self.s.v)
@@ -247,7 +255,7 @@ impl Stepper<'_> {
             .iter()
             .map(|&c| p.contacts[c].delta(&self.s.x))
             .collect();
-        let mut trial = self.held_trial(set, tau)?;
+        let mut trial = self.held_trial(set, tau, true)?;
         for _ in 0..40 {
             let dev = set
                 .iter()
@@ -263,7 +271,7 @@ impl Stepper<'_> {
             // The deviation falls as τ³: aim at 0.7 of the tolerance, within [1/10, 1/2].
             tau *= (0.7 / dev).cbrt().clamp(0.1, 0.5);
             self.diag.held_subdivisions += 1;
-            trial = self.held_trial(set, tau)?;
+            trial = self.held_trial(set, tau, true)?;
         }
         Ok((tau, trial))
     }
@@ -337,8 +345,6 @@ impl Stepper<'_> {
         let p = self.p;
         let t0 = self.s.t;
         let set: Vec<usize> = self.s.persistent.iter().map(|&(c, _)| c).collect();
-        let (tau, trial) =
-            self.held_accurate_length(&set, self.held_cap.map_or(tau_grid, |c| c.min(tau_grid)))?;
         let a0 = p.ground(self.s.j, self.s.t);
         let (lam0, tol0) = self.holding_forces(&set, &self.s.x, &self.s.v, a0, self.s.t)?;
         if let Some(k) = (0..set.len())
@@ -347,6 +353,8 @@ impl Stepper<'_> {
         {
             return Ok(self.release(set[k]));
         }
+        let (tau, trial) =
+            self.held_accurate_length(&set, self.held_cap.map_or(tau_grid, |c| c.min(tau_grid)))?;
         let (f_end, k_end) = self.force_at(&set, tau, &trial.x, &trial.v)?;
         let (s_hold, release) = if f_end < -1.0 {
             // The force turns tensile inside: locate where (f(0) ≥ −1 ≥ f(τ)).
@@ -383,7 +391,7 @@ impl Stepper<'_> {
         } = if s_hold == tau {
             trial
         } else {
-            self.held_trial(&set, s_hold)?
+            self.held_trial(&set, s_hold, false)?
         };
         let full = s_hold == tau_grid;
         let t_stop = if full { t_end } else { self.s.t + s_hold };
