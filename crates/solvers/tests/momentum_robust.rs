@@ -107,6 +107,31 @@ fn plastic_pair_releases_where_the_holding_force_turns_tensile() {
     assert!(errs[2] < 5e-12, "release-time errors {errs:?}");
 }
 
+/// A held tolerance below round-off cannot be met: the held segment is shortened 40 times
+/// (to under 1e-12 of the record step) and the run stops with the time and the reason,
+/// instead of going on with a segment that misses the tolerance. (At 1e-8 the same pair
+/// runs, above; no random scene of 4 000 reaches the limit at the default or at 1e-8.)
+#[test]
+fn a_held_tolerance_below_round_off_stops_with_a_reason() {
+    let mut s = two_oscillators(1.0e5, 4.0e6, 1.0e5, 1.6e7, 0.5, 0.0, 0.0, 1.5);
+    s.momentum.held_tolerance = 1e-20;
+    s.ground = Some(GroundMotion {
+        name: "zero".into(),
+        dt: 4e-3,
+        accel: vec![0.0; 376],
+    });
+    match solve(&s, None) {
+        Err(solvers::SolverError::Stalled { time, reason }) => {
+            assert!(time > 0.0 && time < 0.1, "t = {time}: {reason}");
+            assert!(
+                reason.contains("momentum.held_tolerance") && reason.contains("40 shortenings"),
+                "{reason}"
+            );
+        }
+        other => panic!("expected Stalled, got {:?}", other.map(|o| o.stats)),
+    }
+}
+
 /// A contact found closed while its floors separate is not an impact: no impulse, no
 /// record, no effect on the impact-rate guard.
 #[test]

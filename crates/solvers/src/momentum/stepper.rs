@@ -584,12 +584,32 @@ impl<'a> Stepper<'a> {
     }
 
     /// The displacements changed without a sample (the held gaps closed,
-    /// [`Stepper::close_held_gaps`]): the next interval's values at its start are the new ones.
+    /// [`Stepper::close_held_gaps`]): the next interval's values at its start are the new ones,
+    /// and they are a sample of the peaks and overlap maxima too (the same formulas as the
+    /// sample kernel: |u|, |k (u_i − u_{i−1})| and u_left − u_right), or a peak reached at the
+    /// jump would be missed: the next interval's sample looks at its end and its interior only.
     pub(super) fn refresh_values(&mut self) {
+        let t = self.s.t;
         for (b, bm) in self.p.modal.buildings.iter().enumerate() {
-            let o = self.floors_at(b);
+            let (o, f) = (self.floors_at(b), self.floor_at(b, 0));
             bm.to_floors(&self.s.x, &mut self.u_prev[o + 1..o + self.fs + 1]);
+            // u_prev[o] is the ground's 0.
+            for i in 0..bm.n_floors {
+                let (u, below) = (self.u_prev[o + 1 + i], self.u_prev[o + i]);
+                let shear = (self.stiffness[f + i] * (u - below)).abs();
+                self.disp_max[f + i] = self.disp_max[f + i].max(u.abs());
+                self.shear_max[f + i] = self.shear_max[f + i].max(shear);
+            }
+            self.env_stale[b] = true;
         }
+        for k in 0..self.overlaps.pairs.len() {
+            let op = &self.overlaps.pairs[k];
+            let i = self.floors_at(op.left) + op.left_dof + 1;
+            let j = self.floors_at(op.right) + op.right_dof + 1;
+            let y = self.u_prev[i] - self.u_prev[j];
+            self.overlaps.offer(k, t, y);
+        }
+        self.overlap_stale = true;
     }
 
     /// Peak story shears and floor displacements per building.
@@ -1278,5 +1298,55 @@ impl<'a> Stepper<'a> {
             });
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A held-gap projection moves the floors without a sample: `refresh_values` offers the
+    /// new values to the peaks and the overlap maxima (with the sample kernel's formulas), so
+    /// a peak reached at the jump is not lost.
+    #[test]
+    fn values_moved_without_a_sample_are_offered_to_the_peaks() {
+        let scene = structure::testing::paper_scene(&[]);
+        let p = Problem::new(&scene).unwrap();
+        let mut st = Stepper::new(&p, &scene, None).unwrap();
+        assert!(!st.overlaps.is_empty());
+        // Building 0 in its first mode, the roof 0.1 m towards building 1 (at rest), higher
+        // modes mixed in: building 0's floors pass building 1's at every pair (the first
+        // mode, of one sign, dominates), and every story of building 0 is sheared.
+        let b0 = &p.modal.buildings[0];
+        let mut u = vec![0.0; b0.padded_floors()];
+        st.s.x[b0.range.start] = 1.0;
+        b0.to_floors(&st.s.x, &mut u);
+        let first = 0.1 / u[b0.n_floors - 1];
+        for (n, x) in st.s.x[b0.range.clone()].iter_mut().enumerate() {
+            *x = first * (n as f64 + 1.0).powi(-3) * if n % 3 == 2 { -1.0 } else { 1.0 };
+        }
+        let before = st.overlaps.max.clone();
+        st.refresh_values();
+        for (b, bm) in p.modal.buildings.iter().enumerate() {
+            let mut u = vec![0.0; bm.padded_floors() + 1];
+            bm.to_floors(&st.s.x, &mut u[1..]);
+            for i in 0..bm.n_floors {
+                let f = st.floor_at(b, i);
+                assert_eq!(st.disp_max[f], u[i + 1].abs(), "building {b} floor {i}");
+                let shear = (st.stiffness[f] * (u[i + 1] - u[i])).abs();
+                assert_eq!(st.shear_max[f], shear, "building {b} story {i}");
+                assert!(b == 1 || shear > 0.0, "building {b} story {i}");
+            }
+        }
+        for (k, op) in st.overlaps.pairs.iter().enumerate() {
+            let y = |b: usize, dof: usize| {
+                let mut u = vec![0.0; p.modal.buildings[b].padded_floors()];
+                p.modal.buildings[b].to_floors(&st.s.x, &mut u);
+                u[dof]
+            };
+            let expect = y(op.left, op.left_dof) - y(op.right, op.right_dof);
+            assert!(expect > before[k], "pair {k}: {expect} after {}", before[k]);
+            assert_eq!(st.overlaps.max[k], expect, "pair {k}");
+        }
     }
 }
