@@ -17,7 +17,10 @@
 //!   where δ̇ > 0 is looked for (the window's eighths, then halvings towards its start) and
 //!   the maximum is located after it;
 //! - δ₀ ≥ 0 (touching just after an impact or a release): δ̇₀ > 0 with δ₁ ≥ 0 is an
-//!   immediate (zero-speed) closure (with δ₁ < 0 a round-off overlap, ignored); otherwise the minimum is located first and the crossing after it.
+//!   immediate (zero-speed) closure (with δ₁ < 0 a round-off overlap, ignored); otherwise,
+//!   with δ̇₁ > 0, the direction is read from δ̇ a moment later (2⁻²⁰ of the window, δ̇₀
+//!   being round-off at rest): rising, an immediate closure; falling, the minimum is located
+//!   from there and the crossing after it.
 //!
 //! A contact just resolved is searched at δ = `shift` (its round-off band) until its gap
 //! has opened beyond −`shift`; where it opens that far and closes again within one window,
@@ -179,20 +182,22 @@ impl Locator<'_> {
         a * (1.0 + 1e-6)
     }
 
-    /// A point of (lo, tau] where δ̇ > 0, if one is found: the window's eighths, then the
-    /// window halved towards lo down to the root tolerance (a contact at rest after a plastic
-    /// impulse rises from its start, where the rise may last a tiny part of the window).
-    fn rising_point(&mut self, lo: f64, tau: f64) -> Option<f64> {
+    /// A point of (lo, tau] where δ̇ > 0 (`rising`) or δ̇ < 0, if one is found: the window's
+    /// eighths, then the window halved towards lo down to the root tolerance (a contact at
+    /// rest after a plastic impulse moves from its start, where the motion may last a tiny
+    /// part of the window before it turns).
+    fn point_where(&mut self, lo: f64, tau: f64, rising: bool) -> Option<f64> {
         let span = tau - lo;
+        let sign = if rising { 1.0 } else { -1.0 };
         for j in 1..8 {
             let s = lo + span * j as f64 / 8.0;
-            if self.ddelta(s) > 0.0 {
+            if sign * self.ddelta(s) > 0.0 {
                 return Some(s);
             }
         }
         let mut s = lo + span / 16.0;
         while s - lo > self.tol {
-            if self.ddelta(s) > 0.0 {
+            if sign * self.ddelta(s) > 0.0 {
                 return Some(s);
             }
             s = lo + 0.5 * (s - lo);
@@ -260,7 +265,19 @@ impl Locator<'_> {
             if dd1 <= 0.0 {
                 return None;
             }
-            let s_min = self.brent(lo, tau, true);
+            // Touching and at rest (δ̇₀ ≤ 0 is round-off after a plastic impulse, and its value
+            // from the arcs may differ in sign from `dd0`, the state's): whether δ rises or
+            // falls from here is the sign of δ̇ a moment later (2⁻²⁰ of the window, where the
+            // acceleration has long outgrown the round-off). Rising: an immediate closure;
+            // falling: the minimum is bracketed from there. Bracketed from the start, Brent had
+            // no bracket when the arcs' δ̇₀ was +round-off and fell back to the start, a
+            // zero-length closure found again and again at one state under a separating
+            // acceleration (random seed 3927: δ̇₀ = ±2.8e-17 m/s, −0.53 m/s²; `Stalled`).
+            let start = lo + (tau - lo) * (-20.0f64).exp2();
+            if self.ddelta(start) >= 0.0 {
+                return Some(lo);
+            }
+            let s_min = self.brent(start, tau, true);
             if self.delta(s_min) >= 0.0 {
                 return Some(s_min);
             }
@@ -303,7 +320,7 @@ impl Locator<'_> {
                 if d0.max(d0 + span * (dd0 + 0.5 * a * span)) < 0.0 {
                     return None;
                 }
-                self.rising_point(lo, tau)?
+                self.point_where(lo, tau, true)?
             };
             let s_max = self.brent(start, tau, true);
             if resolved && dd0 < 0.0 {
