@@ -108,10 +108,11 @@
 //!   turns back within the window: `Locator::locate` takes a touching, approaching contact
 //!   whose gap is below the band at the window's end for a round-off overlap, and the floor
 //!   goes into the wall for a moment. A known defect, left: treating every approach faster
-//!   than `capture_velocity` as a closure mends 52 (tried) but moves capture decisions near
-//!   1e-4 m/s in seeds 1164, 2709, 3181 and 3638, where the impulse method's identical case
-//!   analysis (`impulse::events::closure_in`) then disagrees; both methods need the change
-//!   together.
+//!   than `capture_velocity` as a closure mends 52, but in the momentum method alone seeds
+//!   1164, 2709, 3181 and 3638 then disagree with the impulse method (its case analysis,
+//!   `impulse::events::closure_in`, is the same), and in both methods 22 seeds of 4000 fail
+//!   instead of 16 (peaks up to 2.1e-4 apart: 689, 3076, 3638), the two deciding differently
+//!   whether an approach near `capture_velocity` is an impact or a touch.
 //! - *No stall* is left (seed 3927 at the tight tolerance runs to the end, above).
 //! - Seed 1490 (free flight, no held contacts): 135 against 138 impacts, not the impulse
 //!   method's integration error; as before.
