@@ -32,6 +32,11 @@ use roots::{Convergency, SearchError};
 use super::impulse::ContactGeom;
 use super::modal::{Arc, ArcLanes, Modal, TrigMemo};
 
+/// Where a touching contact at rest reads its direction, as a fraction of the window (2⁻²⁰):
+/// its δ̇₀ is round-off, while a moment later the acceleration has long outgrown it
+/// ([`Locator::locate`]).
+const AT_REST_PROBE: f64 = 1.0 / 1_048_576.0;
+
 /// Brent convergence: |Δs| below `tol`, exact zero, iteration count recorded.
 pub struct Conv {
     pub tol: f64,
@@ -171,15 +176,21 @@ impl Locator<'_> {
         }
     }
 
-    /// A bound on |δ̈| over the window: |q̈_n| ≤ ω_n²·|A_n − iB_n| (the particular part of an
-    /// arc is linear in s), summed with |g_n|.
-    fn accel_bound(&self) -> f64 {
-        let mut a = 0.0;
-        for (n, (g, arc)) in self.contact.g.iter().zip(self.arcs).enumerate() {
-            let w = self.modal.omega[n];
-            a += g.abs() * w * w * arc.amplitude();
+    /// Σ|g_n|·ω_n^(2k)·|A_n − iB_n|: with |q_n⁽ʲ⁾| ≤ ω_n^j·|A_n − iB_n| for the homogeneous
+    /// part of an arc (its particular part is linear in s), a bound on |δ⁽²ᵏ⁾| over the
+    /// window for k ≥ 1 (k = 1: the acceleration; k = 2: the fourth derivative of
+    /// [`Locator::max_bound`]).
+    fn derivative_bound(&self, k: u32) -> f64 {
+        let mut sum = 0.0;
+        for (n, (g, a)) in self.contact.g.iter().zip(self.arcs).enumerate() {
+            let w2 = self.modal.omega[n] * self.modal.omega[n];
+            let mut term = g.abs();
+            for _ in 0..k {
+                term *= w2;
+            }
+            sum += term * a.amplitude();
         }
-        a * (1.0 + 1e-6)
+        sum
     }
 
     /// A point of (lo, tau] where δ̇ > 0 (`rising`) or δ̇ < 0, if one is found: the window's
@@ -233,11 +244,7 @@ impl Locator<'_> {
                 m = m.max(p(u));
             }
         }
-        let mut d4 = 0.0;
-        for (n, (g, a)) in self.contact.g.iter().zip(self.arcs).enumerate() {
-            let w2 = self.modal.omega[n] * self.modal.omega[n];
-            d4 += g.abs() * w2 * w2 * a.amplitude();
-        }
+        let d4 = self.derivative_bound(2);
         m + t.powi(4) / 384.0 * d4 * (1.0 + 1e-6) + 1e-15 * (d0.abs() + d1.abs())
     }
 
@@ -273,7 +280,7 @@ impl Locator<'_> {
             // no bracket when the arcs' δ̇₀ was +round-off and fell back to the start, a
             // zero-length closure found again and again at one state under a separating
             // acceleration (random seed 3927: δ̇₀ = ±2.8e-17 m/s, −0.53 m/s²; `Stalled`).
-            let start = lo + (tau - lo) * (-20.0f64).exp2();
+            let start = lo + (tau - lo) * AT_REST_PROBE;
             if self.ddelta(start) >= 0.0 {
                 return Some(lo);
             }
@@ -316,7 +323,7 @@ impl Locator<'_> {
                 // bound whose maximum is at an end: below zero at both, nothing closes (a
                 // contact separating after an elastic impact: the common case, no evaluation).
                 let span = tau - lo;
-                let a = self.accel_bound();
+                let a = self.derivative_bound(1) * (1.0 + 1e-6);
                 if d0.max(d0 + span * (dd0 + 0.5 * a * span)) < 0.0 {
                     return None;
                 }
