@@ -12,6 +12,7 @@
 //! [`RunOutput`] (serialised as the JSON documented in the README), so any difference
 //! between their answers comes from the contact treatment alone.
 
+pub mod closure;
 pub mod gap;
 pub mod impulse;
 pub mod momentum;

@@ -48,7 +48,7 @@
 //!   ([`bisect`]) evaluate three levels of midpoints at once;
 //! - without a history, the instants before the end update the peaks only.
 
-use roots::Convergency;
+use crate::closure::Conv;
 use structure::Scene;
 
 use super::dopri::{dense_at, Dopri5};
@@ -66,28 +66,11 @@ const CONTACT_STEP_FRACTION: f64 = 1.0 / 8.0;
 /// Root tolerance in θ (fraction of the step).
 const THETA_TOL: f64 = 1e-14;
 
-struct Conv {
-    xtol: f64,
-    max_iter: usize,
-}
-
-impl Convergency<f64> for Conv {
-    fn is_root_found(&mut self, y: f64) -> bool {
-        y == 0.0
-    }
-    fn is_converged(&mut self, a: f64, b: f64) -> bool {
-        (a - b).abs() <= self.xtol
-    }
-    fn is_iteration_limit_reached(&mut self, iter: usize) -> bool {
-        iter >= self.max_iter
-    }
-}
-
 /// Brent on [a, b]; `calls` counts evaluations. Without a sign change returns `a`.
 pub(crate) fn locate(mut f: impl FnMut(f64) -> f64, a: f64, b: f64, calls: &mut u64) -> f64 {
     let mut conv = Conv {
-        xtol: THETA_TOL,
-        max_iter: 200,
+        tol: THETA_TOL,
+        iterations: 0,
     };
     let g = |x: f64| {
         *calls += 1;

@@ -1,16 +1,16 @@
 //! The event search of the impulse method on the dense output of an accepted step
-//! ([`earliest`]): closures of open contacts (the momentum method's case analysis on the
-//! interpolant, [`closure_in`]), the release of a held contact (its holding force over its
+//! ([`earliest`]): closures of open contacts (the case analysis shared with the momentum
+//! method, [`crate::closure`], on the interpolant: [`DenseGap`]), the release of a held contact (its holding force over its
 //! round-off band crossing −1) and the kinks of yielding stories before either.
 
 use super::held;
 use super::problem::Problem;
 use super::stepper::State;
+use crate::closure::{find_root_brent, Conv, GapCurve, Search};
 use crate::gap::adaptive::kin;
 use crate::gap::dopri::Dopri5;
 use crate::gap::stories::Kink;
 use crate::gap::Segment;
-use crate::momentum::events::Conv;
 use crate::momentum::problem::SIMULTANEOUS;
 
 /// Samples of the dense output per step for the event search (each window holds at most one
@@ -32,7 +32,7 @@ pub(super) enum Event {
 /// an end) the end where |f| is smaller.
 fn brent(mut f: impl FnMut(f64) -> f64, a: f64, b: f64, tol: f64, iters: &mut u64) -> f64 {
     let mut conv = Conv { tol, iterations: 0 };
-    let r = roots::find_root_brent(a, b, &mut f, &mut conv);
+    let r = find_root_brent(a, b, &mut f, &mut conv);
     *iters += conv.iterations as u64 + 1;
     match r {
         Ok(s) => s.clamp(a, b),
@@ -46,60 +46,37 @@ fn brent(mut f: impl FnMut(f64) -> f64, a: f64, b: f64, tol: f64, iters: &mut u6
     }
 }
 
-/// The first closure θ in the window [lo, hi] of the dense output, given (δ, δ̇) at both
-/// ends: the momentum method's case analysis ([`crate::momentum::events`]) on the
-/// interpolant instead of the closed form (the interior maximum is located by Brent on δ̇
-/// whenever δ̇ turns from + to −, without the closed form's rigorous filter).
-#[allow(clippy::too_many_arguments)]
-#[inline]
-fn closure_in(
-    f: impl Fn(f64) -> (f64, f64),
-    lo: f64,
-    hi: f64,
-    (d0, dd0): (f64, f64),
-    (d1, dd1): (f64, f64),
-    tol: f64,
-    iters: &mut u64,
-) -> Option<f64> {
-    let d = |s: f64| f(s).0;
-    let dd = |s: f64| f(s).1;
-    if d0 >= 0.0 {
-        if dd0 > 0.0 {
-            return if d1 >= 0.0 { Some(lo) } else { None };
-        }
-        if dd1 <= 0.0 {
-            return None;
-        }
-        let s_min = brent(dd, lo, hi, tol, iters);
-        if d(s_min) >= 0.0 {
-            return Some(s_min);
-        }
-        if d1 >= 0.0 {
-            return Some(brent(d, s_min, hi, tol, iters));
-        }
-        return None;
+/// One contact's gap function on the dense output of a step, θ ∈ [0, 1]: the [`GapCurve`]
+/// of the impulse method. Its rate is the interpolated δ̇ (m/s, a positive multiple of
+/// dδ/dθ up to the interpolation error); the interpolant bounds no derivative, so every
+/// window whose signs ask for it is searched (no filter).
+struct DenseGap<'a> {
+    dp: &'a Dopri5,
+    n: usize,
+    l: usize,
+    right: Option<usize>,
+    gap: f64,
+}
+
+impl GapCurve for DenseGap<'_> {
+    fn delta(&mut self, th: f64) -> f64 {
+        kin(self.dp, self.n, self.l, self.right, self.gap, th).0
     }
-    if d1 >= 0.0 {
-        if dd0 < 0.0 && dd1 > 0.0 {
-            let s_min = brent(dd, lo, hi, tol, iters);
-            return Some(brent(d, s_min, hi, tol, iters));
-        }
-        return Some(brent(d, lo, hi, tol, iters));
+    fn rate(&mut self, th: f64) -> f64 {
+        kin(self.dp, self.n, self.l, self.right, self.gap, th).1
     }
-    if dd0 > 0.0 && dd1 < 0.0 {
-        let s_max = brent(dd, lo, hi, tol, iters);
-        if d(s_max) >= 0.0 {
-            return Some(brent(d, lo, s_max, tol, iters));
-        }
+    fn derivative_bound(&self, _k: u32) -> Option<f64> {
+        None
     }
-    None
 }
 
 /// The earliest event of the accepted step `(t, hs)` (start, length, s) on its dense
 /// output `dp`, as (θ, event):
 /// - closures of the open contacts, each searched in [`EVENT_SAMPLES`] windows by
-///   [`closure_in`] against its gap (shifted by the re-arming band `pen` while the contact
-///   is grazing; a grazing contact whose gap has opened beyond the band is re-armed here);
+///   [`Search::locate`] against its gap (shifted by the re-arming band `pen` while the
+///   contact is grazing; a grazing contact whose gap has opened beyond the band at the step's
+///   start or at a window's end before the first event is re-armed here, or inside a window
+///   by the search);
 ///   the closures within [`SIMULTANEOUS`] s of the first form one event;
 /// - the release of a held contact: min λ/band over the held set crossing −1 between the
 ///   samples, located by Brent (it wins a tie with a closure);
@@ -109,7 +86,7 @@ fn closure_in(
 /// Root tolerance: 2ε·t in time (the momentum method's), in units of θ. `scratch` holds
 /// one state; `iters` counts the root-finder evaluations.
 ///
-/// Inlined (with [`closure_in`]) into [`super::stepper::ImpulseStepper::step`] and from
+/// Inlined into [`super::stepper::ImpulseStepper::step`] and from
 /// there into the driver's loop: inside that loop LLVM inlines the dense-output
 /// evaluations of the samples, as it did when the loop was one function (callgrind: 0.8 %
 /// more instructions on the paper scene otherwise).
@@ -128,6 +105,7 @@ pub(super) fn earliest(
     let n = sys.n;
     let th_tol = (2.0 * f64::EPSILON * (t + hs) + 1e-300) / hs;
     let mut closures: Vec<(f64, usize)> = Vec::new();
+    let mut rearmed: Vec<(usize, f64)> = Vec::new();
     for (ci, cd) in sys.contacts.iter().enumerate() {
         if s.held.set.contains(&ci) {
             continue;
@@ -135,21 +113,46 @@ pub(super) fn earliest(
         if s.grazing[ci] && cd.rel(&s.y[..n]) - cd.gap < -p.pen[ci] {
             s.grazing[ci] = false;
         }
-        let shift = if s.grazing[ci] { p.pen[ci] } else { 0.0 };
-        let right = (!cd.wall).then_some(cd.r);
-        let f = |th: f64| kin(dp, n, cd.l, right, cd.gap + shift, th);
-        let mut prev = f(0.0);
+        // A contact not yet re-armed is searched at δ = pen until its gap opens beyond −pen:
+        // at a window end (the later windows at δ = 0), or inside a window at the minimum
+        // that precedes a new approach (the search re-arms it there), as in the momentum
+        // method.
+        let mut shift = if s.grazing[ci] { p.pen[ci] } else { 0.0 };
+        let mut curve = DenseGap {
+            dp,
+            n,
+            l: cd.l,
+            right: (!cd.wall).then_some(cd.r),
+            gap: cd.gap,
+        };
+        let (d, dd) = kin(dp, n, cd.l, curve.right, cd.gap, 0.0);
+        let mut prev = (d - shift, dd);
         for j in 1..=EVENT_SAMPLES {
             let (lo, hi) = (
                 (j - 1) as f64 / EVENT_SAMPLES as f64,
                 j as f64 / EVENT_SAMPLES as f64,
             );
-            let cur = f(hi);
-            if let Some(th) = closure_in(f, lo, hi, prev, cur, th_tol, iters) {
+            let (d, dd) = kin(dp, n, cd.l, curve.right, cd.gap, hi);
+            let cur = (d - shift, dd);
+            let mut search = Search {
+                lo,
+                hi,
+                tol: th_tol,
+                shift,
+                iterations: 0,
+            };
+            let found = search.locate(&mut curve, prev.0, prev.1, cur.0, cur.1);
+            *iters += search.iterations;
+            if let Some(th) = found {
                 closures.push((th, ci));
                 break;
             }
             prev = cur;
+            if shift > 0.0 && prev.0 + shift < -shift {
+                prev.0 += shift;
+                shift = 0.0;
+                rearmed.push((ci, hi));
+            }
         }
     }
     let mut release: Option<(f64, usize)> = None;
@@ -193,12 +196,23 @@ pub(super) fn earliest(
         }
         _ => None,
     };
-    if s.stories.is_empty() {
-        return event;
+    let event = if s.stories.is_empty() {
+        event
+    } else {
+        let limit = event.as_ref().map_or(1.0, |(th, _)| *th);
+        match s.stories.locate_kink(dp, 0, n, limit, iters) {
+            Some(k) => Some((k.theta, Event::Kink(k))),
+            None => event,
+        }
+    };
+    // The re-arming outlives the step if it came before the part of it taken (to the first
+    // event or its end): a gap that opened beyond −pen and is back inside the band at the
+    // end is then searched at δ = 0 by the next step, not at δ = pen.
+    let taken = event.as_ref().map_or(1.0, |(th, _)| *th);
+    for (ci, th) in rearmed {
+        if th <= taken {
+            s.grazing[ci] = false;
+        }
     }
-    let limit = event.as_ref().map_or(1.0, |(th, _)| *th);
-    match s.stories.locate_kink(dp, 0, n, limit, iters) {
-        Some(k) => Some((k.theta, Event::Kink(k))),
-        None => event,
-    }
+    event
 }

@@ -26,9 +26,10 @@
 //! **Events** (`events.rs`), located on the dense output after every accepted step (θ = ¼, ½, ¾, 1 and
 //! Brent, root tolerance 2ε·t as in the momentum method; the step is cut at the first
 //! event and the state taken from the interpolant):
-//! - closure of an open contact: δ crosses 0 upwards, with the momentum method's case
-//!   analysis ([`crate::momentum::events`]: interior maxima of δ, a contact touching at the
-//!   window start), the same re-arming band (a contact just resolved is found closing only
+//! - closure of an open contact: δ crosses 0 upwards, with the case analysis shared with
+//!   the momentum method ([`crate::closure`]: interior maxima of δ, a contact just resolved
+//!   closing again between falling ends, a contact touching at the window start; without
+//!   the closed form's derivative bounds, so without its filters), the same re-arming band (a contact just resolved is found closing only
 //!   at δ = 1e-9·max(gap, 1 mm) until its gap has opened beyond that band) and the same
 //!   simultaneity window (closures within 1e-12 s are solved together);
 //! - release of a held contact: min_c λ_c/band_c crosses −1, band_c = 1e-9 of the sizes of

@@ -387,11 +387,11 @@ impl Stepper<'_> {
                     f64::NAN
                 }
             };
-            let mut conv = super::events::Conv {
+            let mut conv = crate::closure::Conv {
                 tol: 2.0 * f64::EPSILON * (self.s.t + tau) + 1e-300,
                 iterations: 0,
             };
-            let r = super::events::find_root_brent(0.0, tau, f, &mut conv);
+            let r = crate::closure::find_root_brent(0.0, tau, f, &mut conv);
             if let Some(e) = err.into_inner() {
                 return Err(e);
             }

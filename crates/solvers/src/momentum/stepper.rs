@@ -15,11 +15,12 @@ use std::collections::VecDeque;
 use structure::Scene;
 
 use super::energy::EnergyAccount;
-use super::events::Locator;
+use super::events::ModalGap;
 pub use super::impact::ImpactDiagnostics;
 use super::modal::{Arc, ArcLanes, TrigMemo};
 use super::peaks;
 pub use super::problem::{Problem, MAX_SUB, SIMULTANEOUS};
+use crate::closure::Search;
 use crate::overlap::OverlapTracker;
 use crate::response::ResponseTracker;
 use crate::rules::ImpactRateGuard;
@@ -957,20 +958,22 @@ impl<'a> Stepper<'a> {
                         self.build_arcs(a0, a1, h, None);
                         arcs_built = true;
                     }
-                    let loc = Locator {
+                    let curve = ModalGap {
                         contact: ct,
                         arcs: &self.arcs,
                         modal: &p.modal,
+                        memo: &mut self.memo,
+                        lanes: &self.lanes,
+                        buf: &mut self.lane_buf,
+                    };
+                    let search = Search {
                         lo: h * (w - 1) as f64 / sub as f64,
                         hi: h * w as f64 / sub as f64,
                         tol: 0.0,
                         shift: 0.0,
                         iterations: 0,
-                        memo: &mut self.memo,
-                        lanes: &self.lanes,
-                        buf: &mut self.lane_buf,
                     };
-                    if !loc.surely_open(prev.0, prev.1, cur.0, cur.1) {
+                    if !search.surely_open(&curve, prev.0, prev.1, cur.0, cur.1) {
                         return Ok(None);
                     }
                 }
@@ -1161,21 +1164,23 @@ impl<'a> Stepper<'a> {
                     let (d, dd) = at(hi, &self.arcs, &mut self.memo);
                     (d - shift, dd)
                 };
-                let mut loc = Locator {
+                let mut curve = ModalGap {
                     contact: ct,
                     arcs: &self.arcs,
                     modal: &p.modal,
+                    memo: &mut self.memo,
+                    lanes: &self.lanes,
+                    buf: &mut self.lane_buf,
+                };
+                let mut search = Search {
                     lo,
                     hi,
                     tol,
                     shift,
                     iterations: 0,
-                    memo: &mut self.memo,
-                    lanes: &self.lanes,
-                    buf: &mut self.lane_buf,
                 };
-                r = loc.locate(prev.0, prev.1, cur.0, cur.1);
-                self.stats.root_iterations += loc.iterations;
+                r = search.locate(&mut curve, prev.0, prev.1, cur.0, cur.1);
+                self.stats.root_iterations += search.iterations;
                 if r.is_some() {
                     break;
                 }
