@@ -17,11 +17,14 @@
 //!   Taylor bound where the curve bounds its acceleration, δ₀ + δ̇₀s + max|δ̈|s²/2 < 0 at both
 //!   ends: nothing closes; else a point where δ̇ > 0 is looked for (the window's eighths, then
 //!   halvings towards its start) and the maximum is located after it;
-//! - δ₀ ≥ 0 (touching just after an impact or a release): δ̇₀ > 0 with δ₁ ≥ 0 is an
-//!   immediate (zero-speed) closure (with δ₁ < 0 a round-off overlap, ignored); otherwise,
-//!   with δ̇₁ > 0, the direction is read from δ̇ a moment later ([`AT_REST_PROBE`] of the
-//!   window, δ̇₀ being round-off at rest): rising, an immediate closure; falling, the minimum
-//!   is located from there and the crossing after it.
+//! - δ₀ ≥ 0 (touching just after an impact, a graze or a release): δ̇₀ > 0 with δ₁ ≥ 0 is an
+//!   immediate closure; otherwise the direction is read from δ̇ a moment later
+//!   ([`AT_REST_PROBE`] of the window, δ̇₀ being round-off at rest). Rising: an immediate
+//!   closure if δ₁ ≥ 0 or if δ rises more than the contact's band (`band`) beyond its start
+//!   before it falls back (less is a round-off overlap, ignored). Falling: with δ̇₁ > 0 the
+//!   minimum is located and the crossing after it; with δ̇₁ ≤ 0 a point where δ̇ > 0 is
+//!   looked for (a dip, a rise back above 0, a fall), and the crossing between the minimum
+//!   and the maximum after it.
 //!
 //! A contact just resolved is searched at δ = `shift` (its round-off band) until its gap
 //! has opened beyond −`shift`; where it opens that far and closes again within one window,
@@ -111,6 +114,9 @@ pub struct Search {
     /// The event is δ = `shift` (m) instead of δ = 0 (a contact not yet re-armed after it was
     /// resolved); set to 0 where the search re-arms the contact inside the window.
     pub shift: f64,
+    /// The contact's round-off band (m; `shift` while it is not re-armed): a touching contact
+    /// that rises more than this beyond its start is closing, not overlapping by round-off.
+    pub band: f64,
     /// Root-finder evaluations, accumulated.
     pub iterations: u64,
 }
@@ -234,36 +240,59 @@ impl Search {
             }
         }
         if d0 >= 0.0 {
-            if dd0 > 0.0 {
-                // Touching and approaching: a real closure only if δ is still ≥ 0 at the
-                // window end; otherwise it is a round-off-sized overlap (velocity residue of
-                // a plastic impulse or a release) that reopens at once.
-                return if d1 >= 0.0 { Some(lo) } else { None };
-            }
-            if dd1 <= 0.0 {
-                return None;
-            }
-            // Touching and at rest (δ̇₀ ≤ 0 is round-off after a plastic impulse, and its value
-            // from the curve may differ in sign from `dd0`, the state's): whether δ rises or
-            // falls from here is the sign of δ̇ a moment later (AT_REST_PROBE of the window,
-            // where the acceleration has long outgrown the round-off). Rising: an immediate
-            // closure; falling: the minimum is bracketed from there. Bracketed from the start,
-            // Brent had no bracket when the curve's δ̇₀ was +round-off and fell back to the
-            // start, a zero-length closure found again and again at one state under a
-            // separating acceleration (random seed 3927 in the momentum method:
-            // δ̇₀ = ±2.8e-17 m/s, −0.53 m/s²; `Stalled`).
-            let start = lo + (tau - lo) * AT_REST_PROBE;
-            if c.rate(start) >= 0.0 {
+            // Touching (just after an impact, a graze or a release).
+            if dd0 > 0.0 && d1 >= 0.0 {
+                // Approaching and still closed at the window's end: a closure now.
                 return Some(lo);
             }
-            let s_min = self.brent(c, start, tau, true);
-            if self.delta(c, s_min) >= 0.0 {
-                return Some(s_min);
+            // Whether δ rises or falls from here is the sign of δ̇ a moment later
+            // (AT_REST_PROBE of the window, where the acceleration has long outgrown the
+            // round-off): δ̇₀ is round-off at rest, and its value from the curve may differ in
+            // sign from `dd0`, the state's. Read from δ̇₀ itself, a zero-length closure was
+            // found again and again at one state under a separating acceleration (random
+            // seed 3927 in the momentum method: δ̇₀ = ±2.8e-17 m/s, −0.53 m/s²; `Stalled`),
+            // and a contact rising from rest after a graze went through (seed 433:
+            // δ̇₀ = +1e-16 m/s, falling first, then 8 bands up).
+            let start = lo + (tau - lo) * AT_REST_PROBE;
+            if c.rate(start) >= 0.0 {
+                if d1 >= 0.0 {
+                    return Some(lo);
+                }
+                // Rising, then below its start at the window's end: a closure now if it rises a
+                // band (`band`) beyond its start on the way; otherwise a round-off-sized overlap
+                // (the velocity residue of a plastic impulse or a release) that reopens at once.
+                // Taken for one whatever its height, a contact 3.4e6 bands into a wall went
+                // through (seed 52, approaching at 8.6e-3 m/s).
+                let top = if dd1 < 0.0 {
+                    tau
+                } else {
+                    self.point_where(c, start, tau, false)?
+                };
+                let s_max = self.brent(c, start, top, true);
+                return (self.delta(c, s_max) >= self.band).then_some(lo);
             }
-            if d1 >= 0.0 {
-                return Some(self.brent(c, s_min, tau, false));
+            if dd1 > 0.0 {
+                // Falling, then rising at the end: the minimum, and the crossing after it.
+                let s_min = self.brent(c, start, tau, true);
+                if self.delta(c, s_min) >= 0.0 {
+                    return Some(s_min);
+                }
+                if d1 >= 0.0 {
+                    return Some(self.brent(c, s_min, tau, false));
+                }
+                return None;
             }
-            return None;
+            // Falling at both: δ may still dip, rise back above 0 and fall again (a graze or
+            // a release whose tensile holding force turns compressive for a moment: seed 196
+            // rose 6e-10 m, 109 bands, over 0.36 ms). The maximum is located after a point
+            // where δ̇ > 0, and the closure is the crossing after the minimum.
+            let rise = self.point_where(c, start, tau, true)?;
+            let s_max = self.brent(c, rise, tau, true);
+            if self.delta(c, s_max) < 0.0 {
+                return None;
+            }
+            let s_min = self.brent(c, start, rise, true);
+            return Some(self.brent(c, s_min, s_max, false));
         }
         if d1 >= 0.0 {
             // Falling first (just after a rebound, under a strong push): the crossing is
@@ -339,39 +368,40 @@ impl Search {
 mod tests {
     use super::*;
 
-    /// δ(s) = c₀ + c₁s + c₂s² + c₃s³ on [0, 1], with its derivative bounds on that window
+    /// δ(s) = c₀ + c₁s + … + c₄s⁴ on [0, 1], with its derivative bounds on that window
     /// (`bounded`) or none (the impulse method's dense output).
     struct Cubic {
-        c: [f64; 4],
+        c: [f64; 5],
         bounded: bool,
     }
 
     impl GapCurve for Cubic {
         fn delta(&mut self, s: f64) -> f64 {
             let c = self.c;
-            c[0] + s * (c[1] + s * (c[2] + s * c[3]))
+            c[0] + s * (c[1] + s * (c[2] + s * (c[3] + s * c[4])))
         }
         fn rate(&mut self, s: f64) -> f64 {
             let c = self.c;
-            c[1] + s * (2.0 * c[2] + s * 3.0 * c[3])
+            c[1] + s * (2.0 * c[2] + s * (3.0 * c[3] + s * 4.0 * c[4]))
         }
         fn derivative_bound(&self, k: u32) -> Option<f64> {
-            let c = self.c;
+            let c = self.c.map(f64::abs);
             self.bounded.then_some(match k {
-                1 => 2.0 * c[2].abs() + 6.0 * c[3].abs(),
-                _ => 0.0,
+                1 => 2.0 * c[2] + 6.0 * c[3] + 12.0 * c[4],
+                _ => 24.0 * c[4],
             })
         }
     }
 
     /// The search over [0, 1] at `shift`, from the curve's own end values.
-    fn locate(c: [f64; 4], bounded: bool, shift: f64) -> (Option<f64>, Search) {
+    fn locate(c: [f64; 5], bounded: bool, shift: f64) -> (Option<f64>, Search) {
         let mut curve = Cubic { c, bounded };
         let mut search = Search {
             lo: 0.0,
             hi: 1.0,
             tol: 4.0 * f64::EPSILON,
             shift,
+            band: 1e-9,
             iterations: 0,
         };
         let (d0, dd0) = (curve.delta(0.0) - shift, curve.rate(0.0));
@@ -382,7 +412,7 @@ mod tests {
 
     /// The first s in [0, 1] with δ(s) ≥ level, by bisection on a fine scan (independent of
     /// the case analysis).
-    fn first_reach(c: [f64; 4], level: f64) -> Option<f64> {
+    fn first_reach(c: [f64; 5], level: f64) -> Option<f64> {
         let mut curve = Cubic { c, bounded: false };
         let n = 100_000;
         let k = (0..=n).find(|&k| curve.delta(k as f64 / n as f64) >= level)?;
@@ -409,7 +439,7 @@ mod tests {
     #[test]
     fn a_resolved_contact_closing_between_falling_ends_is_found() {
         let shift = 1e-9;
-        let closing = [0.0, -1e-17, 6e-9, -5.5e-9];
+        let closing = [0.0, -1e-17, 6e-9, -5.5e-9, 0.0];
         let exact = first_reach(closing, shift).unwrap();
         assert!(exact > 0.1 && exact < 0.73, "{exact}");
         for bounded in [true, false] {
@@ -418,12 +448,12 @@ mod tests {
             assert!((s - exact).abs() < 1e-12, "{s} vs {exact}");
             assert!(search.iterations > 0);
             // Its maximum 0.64e-9 stays below the band.
-            let (r, _) = locate([0.0, -1e-17, 3e-9, -2.5e-9], bounded, shift);
+            let (r, _) = locate([0.0, -1e-17, 3e-9, -2.5e-9, 0.0], bounded, shift);
             assert_eq!(r, None, "bounded {bounded}");
         }
         // Separating after an elastic impact (δ̇₀ = −0.1 m/s): the Taylor bound answers
         // without a single evaluation where the curve bounds its acceleration.
-        let (r, search) = locate([0.0, -0.1, 1e-3, 0.0], true, shift);
+        let (r, search) = locate([0.0, -0.1, 1e-3, 0.0, 0.0], true, shift);
         assert_eq!((r, search.iterations), (None, 0));
     }
 
@@ -434,7 +464,7 @@ mod tests {
     #[test]
     fn a_touching_contact_at_rest_reads_its_direction_a_moment_later() {
         // δ = 1e-17 s − 0.5 s² + 0.8 s³: a minimum at s = 5/12, δ(1) = 0.3 ≥ 0.
-        let c = [0.0, 1e-17, -0.5, 0.8];
+        let c = [0.0, 1e-17, -0.5, 0.8, 0.0];
         let exact = {
             // The crossing after the minimum: first reach of 0 on [0.5, 1].
             let mut curve = Cubic { c, bounded: false };
@@ -456,6 +486,7 @@ mod tests {
                 hi: 1.0,
                 tol: 4.0 * f64::EPSILON,
                 shift: 0.0,
+                band: 1e-9,
                 iterations: 0,
             };
             // The state's δ̇₀ is −round-off.
@@ -466,14 +497,46 @@ mod tests {
         }
     }
 
+    /// A touching contact (δ₀ = 0, not re-armed) left at rest with a round-off δ̇₀ > 0 that
+    /// dips, rises back above 0 and falls again within the window (δ = −s²(s − 0.3)(s − 0.7)):
+    /// the closure is the crossing at s = 0.3, with or without bounds (seeds 196 and 433: taken
+    /// for a round-off overlap, or for no closure at all, the floors went through by up to 123
+    /// bands). Without the rise it stays open.
+    #[test]
+    fn a_touching_contact_that_dips_and_rises_again_closes() {
+        let shift = 1e-9;
+        // −s²(s² − s + 0.21) = −0.21 s² + s³ − s⁴, plus the shift and the round-off rate.
+        let c = [shift, 1e-16, -0.21, 1.0, -1.0];
+        for bounded in [true, false] {
+            let (r, _) = locate(c, bounded, shift);
+            let s = r.unwrap_or_else(|| panic!("missed (bounded {bounded})"));
+            assert!((s - 0.3).abs() < 1e-9, "{s}");
+            let (r, _) = locate([shift, 1e-16, -0.21, 0.0, 0.0], bounded, shift);
+            assert_eq!(r, None);
+        }
+    }
+
+    /// A touching contact approaching (8.6e-3 m/s) that turns back below its start within the
+    /// window is closing now if it rises more than its band (seed 52: 3.4e6 bands into a wall
+    /// when taken for a round-off overlap); a round-off approach (1e-17 m/s) is not.
+    #[test]
+    fn a_touching_approach_is_a_closure_unless_it_is_round_off() {
+        for bounded in [true, false] {
+            let (r, _) = locate([0.0, 8.6e-3, -0.0172, 0.0, 0.0], bounded, 0.0);
+            assert_eq!(r, Some(0.0));
+            let (r, _) = locate([0.0, 1e-17, -1e-3, 0.0, 0.0], bounded, 0.0);
+            assert_eq!(r, None);
+        }
+    }
+
     /// An interior maximum of an armed contact: found at the first crossing where it reaches
     /// zero; below zero, rejected by the cubic filter alone (no evaluation) where the curve
     /// bounds its fourth derivative, and by locating the maximum otherwise.
     #[test]
     fn interior_maxima_are_found_or_filtered() {
-        let reaching = [-0.1, 1.2, -1.2, 0.0];
+        let reaching = [-0.1, 1.2, -1.2, 0.0, 0.0];
         let exact = first_reach(reaching, 0.0).unwrap();
-        let missing = [-0.4, 1.2, -1.2, 0.0];
+        let missing = [-0.4, 1.2, -1.2, 0.0, 0.0];
         for bounded in [true, false] {
             let (r, _) = locate(reaching, bounded, 0.0);
             assert!((r.unwrap() - exact).abs() < 1e-12);

@@ -139,6 +139,7 @@ pub(super) fn earliest(
                 hi,
                 tol: th_tol,
                 shift,
+                band: p.pen[ci],
                 iterations: 0,
             };
             let found = search.locate(&mut curve, prev.0, prev.1, cur.0, cur.1);

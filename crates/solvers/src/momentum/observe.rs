@@ -166,6 +166,9 @@ impl Stepper<'_> {
             self.tracker.observe_contact_forces(&self.held_force);
             self.tracker.sample(self.s.t, self.history.as_deref_mut());
         }
+        if self.audit.is_some() {
+            self.audit_interval();
+        }
     }
 
     /// Sets `skip` per building from the energy envelope (see module docs) and returns

@@ -100,6 +100,8 @@ pub struct Stepper<'a> {
     /// Stops a run whose segments no longer advance time ([`crate::step::Progress`]).
     pub(super) progress: crate::step::Progress,
     pub diag: Diagnostics,
+    /// The contact audit, when asked for ([`super::solve_audited`]).
+    pub(super) audit: Option<super::audit::ContactAudit>,
     pub(super) guard: ImpactRateGuard,
     pub(super) last_impacts: Vec<VecDeque<f64>>,
     /// Per contact: just resolved (impact, release, graze) and not yet re-armed. Such a
@@ -357,6 +359,7 @@ impl<'a> Stepper<'a> {
                 base_step: p.h,
                 ..Diagnostics::default()
             },
+            audit: None,
             guard: ImpactRateGuard::new(p.limits.max_impact_rate),
             last_impacts: vec![VecDeque::new(); p.contacts.len()],
             grazing: vec![false; p.contacts.len()],
@@ -971,6 +974,7 @@ impl<'a> Stepper<'a> {
                         hi: h * w as f64 / sub as f64,
                         tol: 0.0,
                         shift: 0.0,
+                        band: 0.0,
                         iterations: 0,
                     };
                     if !search.surely_open(&curve, prev.0, prev.1, cur.0, cur.1) {
@@ -1177,6 +1181,7 @@ impl<'a> Stepper<'a> {
                     hi,
                     tol,
                     shift,
+                    band: self.pen[ci],
                     iterations: 0,
                 };
                 r = search.locate(&mut curve, prev.0, prev.1, cur.0, cur.1);
