@@ -135,7 +135,17 @@ impl ImpulseStepper<'_> {
         let mut target = target;
         let held = self.s.held.set.iter().copied();
         impulse::add_plastic(&mut set, &mut target, held, |c| self.rel_velocity(c));
-        let imp = impulse::lcp_impulses(&self.p.geoms, &set, &target, t)?;
+        // Touching neighbours (gap within the band, not held), as in the momentum method.
+        let n_active = set.len();
+        let n = self.p.sys.n;
+        let touching: Vec<usize> = (0..self.p.sys.contacts.len())
+            .filter(|&c| {
+                let cd = &self.p.sys.contacts[c];
+                cd.rel(&self.s.y[..n]) - cd.gap >= -self.p.pen[c]
+            })
+            .collect();
+        impulse::add_touching(&mut set, &mut target, touching, |c| self.rel_velocity(c));
+        let imp = impulse::lcp_impulses(&self.p.geoms, &set, &target, n_active, t)?;
         self.contact_loss += self.apply_impulses(&imp);
         for (k, &c) in contacts.iter().enumerate() {
             let vb = v_before[k];

@@ -183,46 +183,111 @@ pub fn add_plastic(
     held: impl IntoIterator<Item = usize>,
     approach: impl Fn(usize) -> f64,
 ) {
-    for c in held {
+    add_participants(set, target, held, |c| approach(c).max(0.0));
+}
+
+/// Appends the contacts `extra` not already in `set`, each with target `target_of(c)`.
+fn add_participants(
+    set: &mut Vec<usize>,
+    target: &mut Vec<f64>,
+    extra: impl IntoIterator<Item = usize>,
+    target_of: impl Fn(usize) -> f64,
+) {
+    for c in extra {
         if !set.contains(&c) {
             set.push(c);
-            target.push(approach(c).max(0.0));
+            target.push(target_of(c));
         }
     }
 }
 
-/// Non-negative impulses P on `set` with W P = target on the retained contacts (the
-/// others get P = 0): solve, drop the most negative, repeat. Returns (contact, P) pairs.
+/// The impulses of an impact: the frictionless complementarity problem over `set`,
+///
+/// ```text
+/// P ≥ 0,   w = W P − target ≥ 0,   P·w = 0,
+/// ```
+///
+/// with W the Delassus matrix of `set` and `target` the least reduction of each contact's
+/// approach speed (m/s): (1 + e) v⁻ for an impacting contact, its approach speed for a held
+/// one (plastic), and v⁻ itself (≤ 0: it may be pushed that far before it needs an impulse)
+/// for a touching neighbour, one with its gap within the round-off band. A contact with P > 0
+/// leaves at exactly its target; one with P = 0 leaves slower than it.
+///
+/// Active set (Murty's least-index principal pivoting, finite for the positive definite W
+/// of independent contacts): the first `n_active` entries of `set` start active; solve
+/// W_AA P_A = target_A, then flip the first contact (in `set` order) that is infeasible, an
+/// active one with P < 0 or an inactive one with w below −1e-9 of the largest |target|
+/// (round-off), and repeat. The solution is unique, and the impulses are those of the final
+/// active set solved in `set` order: where the drop-only loop of the releases before found it
+/// (no touching neighbours, no inactive contact left approaching), the same bits. The pivots
+/// on inactive contacts resolve in one problem what that loop left to a sequence of impacts
+/// at one instant (a contact pushed into approach by its neighbour's impulse). Returns
+/// (contact, P) pairs of the active set.
 pub fn lcp_impulses(
     contacts: &[ContactGeom],
     set: &[usize],
     target: &[f64],
+    n_active: usize,
     time: f64,
 ) -> Result<Vec<(usize, f64)>, SolverError> {
-    let mut active: Vec<usize> = (0..set.len()).collect();
-    loop {
-        if active.is_empty() {
-            return Ok(vec![]);
+    let n = set.len();
+    let mut active = vec![false; n];
+    active[..n_active.min(n)].iter_mut().for_each(|a| *a = true);
+    let tol = 1e-9 * target.iter().fold(0.0_f64, |m, t| m.max(t.abs()));
+    // Pivots: a handful for problems of this size; the bound only guards against a singular
+    // W that slipped through the solve's pivot test.
+    let limit = 1usize << n.min(16);
+    for _ in 0..=limit {
+        let ids: Vec<usize> = (0..n).filter(|&k| active[k]).map(|k| set[k]).collect();
+        let p = if ids.is_empty() {
+            vec![]
+        } else {
+            let rhs: Vec<f64> = (0..n).filter(|&k| active[k]).map(|k| target[k]).collect();
+            solve_delassus(
+                contacts,
+                &ids,
+                rhs,
+                time,
+                "impulses of simultaneous closures",
+            )?
+        };
+        let mut pk = p.iter();
+        let flip = (0..n).find(|&k| {
+            if active[k] {
+                *pk.next().unwrap() < 0.0
+            } else {
+                let wp: f64 = ids
+                    .iter()
+                    .zip(&p)
+                    .map(|(&c, &pc)| contacts[set[k]].dot(&contacts[c].g) * pc)
+                    .sum();
+                wp - target[k] < -tol
+            }
+        });
+        match flip {
+            None => return Ok(ids.into_iter().zip(p).collect()),
+            Some(k) => active[k] = !active[k],
         }
-        let ids: Vec<usize> = active.iter().map(|&k| set[k]).collect();
-        let rhs: Vec<f64> = active.iter().map(|&k| target[k]).collect();
-        let p = solve_delassus(
-            contacts,
-            &ids,
-            rhs,
-            time,
-            "impulses of simultaneous closures",
-        )?;
-        let (worst, pmin) =
-            p.iter().enumerate().fold(
-                (0, f64::INFINITY),
-                |m, (i, &x)| if x < m.1 { (i, x) } else { m },
-            );
-        if pmin >= 0.0 {
-            return Ok(ids.into_iter().zip(p).collect());
-        }
-        active.remove(worst);
     }
+    Err(SolverError::SingularContact {
+        time,
+        contacts: set.to_vec(),
+        context: format!(
+            "impulses of simultaneous closures: no complementary impulses after {limit} pivots"
+        ),
+    })
+}
+
+/// Adds the contacts `touching` (those not already in `set`) to an impact's problem as
+/// touching neighbours: target v⁻ (m/s, `approach(c)`), which may be negative (see
+/// [`lcp_impulses`]; they start inactive, after the others).
+pub fn add_touching(
+    set: &mut Vec<usize>,
+    target: &mut Vec<f64>,
+    touching: impl IntoIterator<Item = usize>,
+    approach: impl Fn(usize) -> f64,
+) {
+    add_participants(set, target, touching, approach);
 }
 
 /// Applies Δq̇ = −Σ g_c P_c.
@@ -271,4 +336,62 @@ pub fn apply_paper(
         out.push((c, (mk * dyk).abs()));
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Three unit masses in a row (mass-scaled rows g: A − B and B − C), the first contact
+    /// approaching at 1 m/s with e = 1, the second touching.
+    fn chain() -> Vec<ContactGeom> {
+        let geom = |g: Vec<f64>| ContactGeom {
+            left: 0,
+            right: 0,
+            left_dof: 0,
+            right_dof: 0,
+            gap: 0.0,
+            restitution: 1.0,
+            g,
+            m_left: 1.0,
+            m_right: 1.0,
+            wall: false,
+        };
+        vec![geom(vec![1.0, -1.0, 0.0]), geom(vec![0.0, 1.0, -1.0])]
+    }
+
+    /// The impulse on A − B alone (P = 2/W = 1) would push B into C at 0.9 m/s, a second
+    /// impact at the same instant: with B − C as a touching neighbour (separating at 0.1 m/s)
+    /// the problem is solved at once, W P = (2, −0.1): P = (1.3, 0.6), A − B leaves at −1 m/s
+    /// (restitution exact) and B − C at 0 (its target: touching, not approaching).
+    #[test]
+    fn a_touching_neighbour_pushed_into_approach_takes_an_impulse() {
+        let c = chain();
+        let (v0, v1) = (1.0, -0.1);
+        let p = lcp_impulses(&c, &[0, 1], &[2.0 * v0, v1], 1, 0.0).unwrap();
+        assert_eq!(p.len(), 2);
+        assert!(
+            (p[0].1 - 1.3).abs() < 1e-15 && (p[1].1 - 0.6).abs() < 1e-15,
+            "{p:?}"
+        );
+        let w = |a: usize, b: usize| c[a].dot(&c[b].g);
+        let after0 = v0 - (w(0, 0) * p[0].1 + w(0, 1) * p[1].1);
+        let after1 = v1 - (w(1, 0) * p[0].1 + w(1, 1) * p[1].1);
+        assert!(
+            (after0 + 1.0).abs() < 1e-15 && after1.abs() < 1e-15,
+            "{after0} {after1}"
+        );
+    }
+
+    /// A neighbour separating fast enough (2 m/s) takes no impulse: the answer is the impact's
+    /// alone, bit for bit the solve of the impacting contact.
+    #[test]
+    fn a_neighbour_that_stays_apart_changes_nothing() {
+        let c = chain();
+        let p = lcp_impulses(&c, &[0, 1], &[2.0, -2.0], 1, 0.0).unwrap();
+        let alone = solve_delassus(&c, &[0], vec![2.0], 0.0, "").unwrap();
+        assert_eq!(p, vec![(0, alone[0])]);
+        // All active at the start (the drop-only loop's start) gives the same.
+        assert_eq!(lcp_impulses(&c, &[0, 1], &[2.0, -2.0], 2, 0.0).unwrap(), p);
+    }
 }

@@ -41,7 +41,9 @@
 //! (eqs 19, 20) with the coefficient of restitution c_r (eqs 21, 22), either with the
 //! Delassus value of the kept modes (`consistent`) or with the paper's floor-mass formula
 //! (eqs 23–24) projected on the kept modes (`paper`). Contacts closing within 1e-12 s are
-//! solved jointly (small LCP). If after a `paper` impulse the floors still approach
+//! solved jointly, with the held contacts (plastic) and the touching neighbours (gap within
+//! the round-off band) in one frictionless complementarity problem
+//! ([`impulse::lcp_impulses`]): no contact leaves an impact approaching. If after a `paper` impulse the floors still approach
 //! (truncated modes), the impact is recorded with the paper's achieved restitution and a
 //! consistent correction impulse follows that sets v⁺ = −c_r v⁻ (counted in
 //! [`Diagnostics::corrections`] and in the `settings` string); so the method never loops
