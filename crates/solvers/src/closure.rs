@@ -121,6 +121,19 @@ pub struct Search {
     pub iterations: u64,
 }
 
+/// Re-arms a contact at a window's end: if it is searched at δ = `shift` (not yet re-armed)
+/// and its gap `prev.0` + shift has opened beyond −shift, the later windows search it at
+/// δ = 0 (`prev` and `shift` moved accordingly). Returns whether it was re-armed (the callers
+/// keep the re-arming beyond the step if it came before the step's first event).
+pub fn rearm_at_window_end(prev: &mut (f64, f64), shift: &mut f64) -> bool {
+    if *shift > 0.0 && prev.0 + *shift < -*shift {
+        prev.0 += *shift;
+        *shift = 0.0;
+        return true;
+    }
+    false
+}
+
 impl Search {
     fn delta(&self, c: &mut impl GapCurve, s: f64) -> f64 {
         c.delta(s) - self.shift

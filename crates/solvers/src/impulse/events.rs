@@ -1,12 +1,13 @@
 //! The event search of the impulse method on the dense output of an accepted step
 //! ([`earliest`]): closures of open contacts (the case analysis shared with the momentum
-//! method, [`crate::closure`], on the interpolant: [`DenseGap`]), the release of a held contact (its holding force over its
-//! round-off band crossing −1) and the kinks of yielding stories before either.
+//! method, [`crate::closure`], on the interpolant: [`DenseGap`]), the release of a held
+//! contact (its holding force over its round-off band crossing −1) and the kinks of yielding
+//! stories before either.
 
 use super::held;
 use super::problem::Problem;
 use super::stepper::State;
-use crate::closure::{find_root_brent, Conv, GapCurve, Search};
+use crate::closure::{find_root_brent, rearm_at_window_end, Conv, GapCurve, Search};
 use crate::gap::adaptive::kin;
 use crate::gap::dopri::Dopri5;
 use crate::gap::stories::Kink;
@@ -149,9 +150,7 @@ pub(super) fn earliest(
                 break;
             }
             prev = cur;
-            if shift > 0.0 && prev.0 + shift < -shift {
-                prev.0 += shift;
-                shift = 0.0;
+            if rearm_at_window_end(&mut prev, &mut shift) {
                 rearmed.push((ci, hi));
             }
         }

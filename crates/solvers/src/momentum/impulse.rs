@@ -234,38 +234,36 @@ pub fn lcp_impulses(
     let mut active = vec![false; n];
     active[..n_active.min(n)].iter_mut().for_each(|a| *a = true);
     let tol = 1e-9 * target.iter().fold(0.0_f64, |m, t| m.max(t.abs()));
+    // W of the whole set once; each pivot solves its active block (the same entries, so the
+    // same bits, as `solve_delassus` on the active contacts).
+    let w = delassus(contacts, set);
     // Pivots: a handful for problems of this size; the bound only guards against a singular
     // W that slipped through the solve's pivot test.
     let limit = 1usize << n.min(16);
     for _ in 0..=limit {
-        let ids: Vec<usize> = (0..n).filter(|&k| active[k]).map(|k| set[k]).collect();
-        let p = if ids.is_empty() {
+        let on: Vec<usize> = (0..n).filter(|&k| active[k]).collect();
+        let p = if on.is_empty() {
             vec![]
         } else {
-            let rhs: Vec<f64> = (0..n).filter(|&k| active[k]).map(|k| target[k]).collect();
-            solve_delassus(
-                contacts,
-                &ids,
-                rhs,
+            let block = on.iter().map(|&a| on.iter().map(|&b| w[a][b]).collect());
+            let rhs = on.iter().map(|&k| target[k]).collect();
+            solve_checked(block.collect(), rhs).ok_or_else(|| SolverError::SingularContact {
                 time,
-                "impulses of simultaneous closures",
-            )?
+                contacts: on.iter().map(|&k| set[k]).collect(),
+                context: "impulses of simultaneous closures".to_string(),
+            })?
         };
         let mut pk = p.iter();
         let flip = (0..n).find(|&k| {
             if active[k] {
                 *pk.next().unwrap() < 0.0
             } else {
-                let wp: f64 = ids
-                    .iter()
-                    .zip(&p)
-                    .map(|(&c, &pc)| contacts[set[k]].dot(&contacts[c].g) * pc)
-                    .sum();
+                let wp: f64 = on.iter().zip(&p).map(|(&a, &pa)| w[k][a] * pa).sum();
                 wp - target[k] < -tol
             }
         });
         match flip {
-            None => return Ok(ids.into_iter().zip(p).collect()),
+            None => return Ok(on.into_iter().map(|k| set[k]).zip(p).collect()),
             Some(k) => active[k] = !active[k],
         }
     }

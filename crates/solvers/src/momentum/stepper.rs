@@ -1190,10 +1190,7 @@ impl<'a> Stepper<'a> {
                     break;
                 }
                 prev = cur;
-                if shift > 0.0 && prev.0 + shift < -shift {
-                    // Opened beyond −pen at this window end: re-armed from here on.
-                    prev.0 += shift;
-                    shift = 0.0;
+                if crate::closure::rearm_at_window_end(&mut prev, &mut shift) {
                     rearmed.push((ci, hi));
                 }
             }
