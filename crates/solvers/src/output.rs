@@ -267,7 +267,8 @@ pub struct History {
     pub velocity: Vec<Vec<f64>>,
     /// Contact forces, N (compressive > 0), one per scene contact. The gap element: the
     /// force of its law. The momentum method: the holding force of a persistent contact
-    /// (constant over each held segment), 0 in free flight; the impulse method: the
+    /// (linear in time over each held segment, from the instantaneous force at its start),
+    /// 0 in free flight; the impulse method: the
     /// instantaneous holding force λ = W⁻¹ δ̈_free of a held contact. Impacts of both are
     /// impulses (finite momentum in zero time), listed in `RunOutput::impacts`, not forces.
     pub contact_force: Vec<Vec<f64>>,

@@ -74,8 +74,9 @@ pub struct MomentumOptions {
     /// persistent-contact phase (default 1e-4 m/s).
     pub capture_velocity: f64,
     /// How far a held gap may stray inside a held segment of a persistent-contact phase,
-    /// relative to max(gap, 1 mm) (default 1e-6): the holding forces are constant over a
-    /// segment, and a segment is shortened until its gaps stray no further at its middle.
+    /// relative to max(gap, 1 mm) (default 1e-6): the holding forces are linear over a
+    /// segment, and a segment is shortened until its gaps stray no further at its middle and
+    /// its force's jump at the next segment's start would move them no further.
     pub held_tolerance: f64,
 }
 

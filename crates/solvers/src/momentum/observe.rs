@@ -163,7 +163,21 @@ impl Stepper<'_> {
         std::mem::swap(&mut self.u_prev, &mut self.u);
         std::mem::swap(&mut self.ud_prev, &mut self.ud);
         if self.history.is_some() {
-            self.tracker.observe_contact_forces(&self.held_force);
+            // Held forces are linear in time over the interval's planned length.
+            let iv = &self.interval;
+            let r = if iv.tau > 0.0 {
+                iv.tau_done / iv.tau
+            } else {
+                0.0
+            };
+            for (now, (f0, f1)) in self
+                .held_force_now
+                .iter_mut()
+                .zip(self.held_force_start.iter().zip(&self.held_force))
+            {
+                *now = f0 + (f1 - f0) * r;
+            }
+            self.tracker.observe_contact_forces(&self.held_force_now);
             self.tracker.sample(self.s.t, self.history.as_deref_mut());
         }
         if self.audit.is_some() {

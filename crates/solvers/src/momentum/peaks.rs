@@ -32,7 +32,8 @@ pub struct Interval {
     pub a1: f64,
     /// Length over which the ground acceleration goes from a0 to a1, s.
     pub tau: f64,
-    /// Constant modal loads of held contacts (persistent phase), if any.
+    /// Modal loads of held contacts (persistent phase), if any: per mode at the start, then
+    /// per mode at `tau` (linear in time in between).
     pub fc: Option<Vec<f64>>,
     /// Length actually integrated (≤ `tau`: an event may end the interval early), s.
     pub tau_done: f64,
@@ -55,7 +56,8 @@ pub fn arcs(modal: &Modal, range: std::ops::Range<usize>, iv: &Interval) -> Vec<
 }
 
 /// The closed-form arcs of the modes `range` from the state (`x0`, `v0`) under the ground
-/// acceleration a0 → a1 over `tau` plus the constant held-contact loads `fc`.
+/// acceleration a0 → a1 over `tau` plus the held-contact loads `fc` (per mode at the start,
+/// then at `tau`; see [`Interval::fc`]).
 #[allow(clippy::too_many_arguments)]
 pub fn arcs_of(
     modal: &Modal,
@@ -67,17 +69,14 @@ pub fn arcs_of(
     a1: f64,
     tau: f64,
 ) -> Vec<Arc> {
+    let nm = modal.len();
     range
         .map(|n| {
-            let extra = fc.map_or(0.0, |f| f[n]);
-            modal.arc(
-                n,
-                x0[n],
-                v0[n],
-                -modal.gamma[n] * a0 + extra,
-                -modal.gamma[n] * a1 + extra,
-                tau,
-            )
+            let (f0, f1) = (-modal.gamma[n] * a0, -modal.gamma[n] * a1);
+            match fc {
+                None => modal.arc(n, x0[n], v0[n], f0, f1, tau),
+                Some(f) => modal.held_arc(n, x0[n], v0[n], f0 + f[n], f1 + f[nm + n], tau),
+            }
         })
         .collect()
 }
@@ -119,7 +118,7 @@ pub struct Deferred {
     /// Per stored interval: x0 then v0, `nm` each, in blocks of [`STATE_BLOCK`] intervals
     /// (a full block is kept as it is and a new one begun: no reallocation copies them).
     state: Vec<Vec<f64>>,
-    /// Held-contact loads of the stored intervals that have some, `nm` each.
+    /// Held-contact loads of the stored intervals that have some, 2 `nm` each (start, end).
     fc: Vec<f64>,
     /// Per stored interval: (a0, a1, tau, integrated length, sample time at its end, offset
     /// of its held-contact loads in `fc` if held).
@@ -163,8 +162,8 @@ impl Deferred {
         block.extend_from_slice(&iv.x0[..nm]);
         block.extend_from_slice(&iv.v0[..nm]);
         let held = iv.fc.as_ref().map(|f| {
-            self.fc.extend_from_slice(&f[..nm]);
-            self.fc.len() - nm
+            self.fc.extend_from_slice(&f[..2 * nm]);
+            self.fc.len() - 2 * nm
         });
         self.meta
             .push((iv.a0, iv.a1, iv.tau, iv.tau_done, t_end, held));
@@ -180,7 +179,7 @@ impl Deferred {
         StoredInterval {
             x0,
             v0,
-            fc: held.map(|o| &self.fc[o..o + nm]),
+            fc: held.map(|o| &self.fc[o..o + 2 * nm]),
             a0,
             a1,
             tau,
@@ -274,20 +273,30 @@ fn amplitudes_in(
     let r = range;
     let (gamma, k, out) = (&modal.gamma[r.clone()], &k[r.clone()], &mut out[r.clone()]);
     let (x0, v0) = (&iv.x0[r.clone()], &iv.v0[r.clone()]);
+    let nm = modal.len();
     match iv.fc.as_deref() {
-        Some(f) => amplitudes_of(gamma, k, x0, v0, |n| f[r.start + n], iv, out),
-        None => amplitudes_of(gamma, k, x0, v0, |_| 0.0, iv, out),
+        Some(f) => amplitudes_of(
+            gamma,
+            k,
+            x0,
+            v0,
+            |n| (f[r.start + n], f[nm + r.start + n]),
+            iv,
+            out,
+        ),
+        None => amplitudes_of(gamma, k, x0, v0, |_| (0.0, 0.0), iv, out),
     }
 }
 
-/// [`amplitudes`] over slices of the same modes (`extra(n)`: the held-contact load).
+/// [`amplitudes`] over slices of the same modes (`extra(n)`: the held-contact load at the
+/// start and at the end).
 #[inline(always)]
 fn amplitudes_of(
     gamma: &[f64],
     k: &[[f64; 3]],
     x0: &[f64],
     v0: &[f64],
-    extra: impl Fn(usize) -> f64,
+    extra: impl Fn(usize) -> (f64, f64),
     iv: &Interval,
     out: &mut [f64],
 ) {
@@ -295,8 +304,8 @@ fn amplitudes_of(
     let nm = out.len();
     let (gamma, k, x0, v0) = (&gamma[..nm], &k[..nm], &x0[..nm], &v0[..nm]);
     for n in 0..nm {
-        let extra = extra(n);
-        let (f0, f1) = (-gamma[n] * iv.a0 + extra, -gamma[n] * iv.a1 + extra);
+        let (e0, e1) = extra(n);
+        let (f0, f1) = (-gamma[n] * iv.a0 + e0, -gamma[n] * iv.a1 + e1);
         let [inv_w2, c, inv_d] = k[n];
         let beta = (f1 - f0) * inv_tau * inv_w2;
         let alpha = (f0 - 2.0 * c * beta) * inv_w2;
@@ -406,7 +415,9 @@ mod tests {
             a0: k as f64,
             a1: 2.0 * k as f64,
             tau: 0.5,
-            fc: k.is_multiple_of(3).then(|| vec![k as f64 + 0.25; nm]),
+            fc: k
+                .is_multiple_of(3)
+                .then(|| (0..2 * nm).map(|n| k as f64 + 0.25 * n as f64).collect()),
             tau_done: 0.25,
         };
         let n = 2 * STATE_BLOCK + 7;

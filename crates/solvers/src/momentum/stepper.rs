@@ -165,9 +165,16 @@ pub struct Stepper<'a> {
     pub(super) shear_rows: Vec<Vec<f64>>,
     /// Scratch: the coefficients of one response quantity.
     pub(super) coef: Vec<f64>,
-    /// Contact forces of the segment being integrated, N, one per scene contact: the
-    /// holding forces of held contacts, 0 otherwise (history output).
+    /// Contact forces of the segment being integrated at its planned end, N, one per scene
+    /// contact: the holding forces of held contacts, 0 otherwise (history output).
     pub(super) held_force: Vec<f64>,
+    /// The same at the segment's start (the forces are linear in time in between).
+    pub(super) held_force_start: Vec<f64>,
+    /// Scratch: the contact forces at a sample.
+    pub(super) held_force_now: Vec<f64>,
+    /// The unit ramp responses ψ_n(τ) and their velocities ψ'_n(τ) of the last held-segment
+    /// length τ asked for (`persistent::unit_ramp_response`), NaN before the first.
+    pub(super) psi_memo: std::cell::RefCell<(f64, Vec<f64>, Vec<f64>)>,
     /// Overlap audit of facing floors without a contact ([`crate::overlap`]).
     pub overlaps: OverlapTracker,
     /// Per audited pair: coefficients of u_left − u_right on all modes (φ_left − φ_right).
@@ -406,6 +413,9 @@ impl<'a> Stepper<'a> {
                 ..Default::default()
             },
             held_force: vec![0.0; p.contacts.len()],
+            held_force_start: vec![0.0; p.contacts.len()],
+            held_force_now: vec![0.0; p.contacts.len()],
+            psi_memo: std::cell::RefCell::new((f64::NAN, Vec::new(), Vec::new())),
             overlap_rows: Vec::new(),
             overlaps: OverlapTracker::new(scene),
             disp_lower: vec![0.0; nb * fs],
@@ -1006,7 +1016,7 @@ impl<'a> Stepper<'a> {
     }
 
     /// Arcs of every mode from the current state, ground a0 → a1 over tau, plus the
-    /// constant contact loads `fc`.
+    /// held-contact loads `fc` (per mode at the start, then per mode at tau; linear in time).
     pub(super) fn build_arcs(&mut self, a0: f64, a1: f64, tau: f64, fc: Option<&[f64]>) {
         let m = &self.p.modal;
         self.arcs.clear();
@@ -1016,12 +1026,16 @@ impl<'a> Stepper<'a> {
         let nm = m.len();
         let (gamma, omega, zeta) = (&m.gamma[..nm], &m.omega[..nm], &m.zeta[..nm]);
         let (series, x, v) = (&m.series[..nm], &self.s.x[..nm], &self.s.v[..nm]);
-        let fc = fc.map(|f| &f[..nm]);
-        self.arcs.extend((0..nm).map(|n| {
-            let extra = fc.map_or(0.0, |f| f[n]);
-            let (f0, f1) = (-gamma[n] * a0 + extra, -gamma[n] * a1 + extra);
-            Arc::new(omega[n], zeta[n], x[n], v[n], f0, f1, tau).series_if(series[n])
-        }));
+        match fc.map(|f| f[..2 * nm].split_at(nm)) {
+            None => self.arcs.extend((0..nm).map(|n| {
+                let (f0, f1) = (-gamma[n] * a0, -gamma[n] * a1);
+                Arc::new(omega[n], zeta[n], x[n], v[n], f0, f1, tau).series_if(series[n])
+            })),
+            Some((e0, e1)) => self.arcs.extend((0..nm).map(|n| {
+                let (f0, f1) = (-gamma[n] * a0 + e0[n], -gamma[n] * a1 + e1[n]);
+                m.held_arc(n, x[n], v[n], f0, f1, tau)
+            })),
+        }
         self.lanes.set(&self.arcs);
     }
 
@@ -1083,10 +1097,22 @@ impl<'a> Stepper<'a> {
                 (x1, v1, t)
             };
             if s_end > 0.0 {
-                let w = a.load_work(s_end, x1, v1);
-                let extra = fc.map_or(0.0, |f| f[n]);
-                let wc = extra * (x1 - a.x0);
-                self.energy.input += w - wc;
+                // The load's work, the ground's part to the input and the held contacts'
+                // (linear over tau) to the contact account: split before the integration by
+                // parts of `load_work`, whose cancellation the steep force ramps of very short
+                // held segments would amplify.
+                let (w, wc) = match fc {
+                    None => (a.load_work(s_end, x1, v1), 0.0),
+                    Some(f) => {
+                        let (c0, c1) = (f[n], f[m.len() + n]);
+                        let (g0, g1) = (-m.gamma[n] * a0, -m.gamma[n] * a1);
+                        (
+                            a.ramp_work(s_end, x1, v1, g0, (g1 - g0) / tau),
+                            a.ramp_work(s_end, x1, v1, c0, (c1 - c0) / tau),
+                        )
+                    }
+                };
+                self.energy.input += w;
                 self.energy.contact -= wc;
                 self.energy.damping +=
                     2.0 * m.zeta[n] * m.omega[n] * a.damping_integral_from(s_end, t);
