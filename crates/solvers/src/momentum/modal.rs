@@ -936,8 +936,8 @@ impl Arc {
         for j in (1..SERIES_TERMS).rev() {
             let mut row = 0.0;
             for k in (1..SERIES_TERMS).rev() {
-                // (A reciprocal from the table, not a division: 576 of them per call made
-                // this the largest cost of held phases, whose short segments use the series.)
+                // (A reciprocal from the table, not a division: 576 of them per call cost
+                // 6 % of a held-heavy run, whose short held segments use the series.)
                 row += u[k] * RECIPROCALS[j + k - 1];
             }
             sum += u[j] * row;

@@ -8,7 +8,7 @@
 //! The exact solution is linear in the forces, so the end gaps are
 //! δ_end = δ_part − C λ₁, δ_part the end gaps with λ₀ falling linearly to 0, and
 //! C_ab = Σ_n g_a,n g_b,n ψ_n(τ), ψ_n(τ) the displacement of mode n at τ under a load rising
-//! linearly from 0 to 1 from rest (`unit_ramp_displacement`). Solving C λ₁ = δ_part − target
+//! linearly from 0 to 1 from rest (`unit_ramp_response`). Solving C λ₁ = δ_part − target
 //! leaves no drift (the target is absolute). Segment lengths are controlled on two
 //! measures, each held to `momentum.held_tolerance` × max(gap, 1 mm): the gaps' deviation
 //! from the straight path at the middle (the mismatch between the linear and the
@@ -54,54 +54,34 @@ use crate::{PersistentContact, SolverError};
 /// (`Stepper::held_accurate_length`).
 const HELD_SHORTENINGS: usize = 40;
 
-/// χ(τ): displacement at τ of a mode (ω, ζ) under a unit constant load from rest,
-/// x'' + 2ζω x' + ω² x = 1, x(0) = x'(0) = 0.
+/// (ψ(τ), ψ'(τ)): displacement and velocity at τ of a mode (ω, ζ) under a load rising
+/// linearly from 0 to 1 over τ, from rest: x'' + 2ζω x' + ω² x = t/τ, x(0) = x'(0) = 0.
 ///
-/// For ωτ ≤ 0.5 by its Taylor series, whose terms a_k = x⁽ᵏ⁾(0) τᵏ/k! follow from the
-/// equation: a_0 = a_1 = 0, a_2 = τ²/2, a_{k+2} = −(2ζωτ a_{k+1})/(k+2) − (ω²τ² a_k)/((k+1)(k+2)).
-/// The closed form 1/ω² − (homogeneous part) loses every digit to cancellation when ωτ is
-/// small (χ ≈ τ²/2 ≪ 1/ω²): on the very short segments that Brent's method tries while
-/// locating a release it returned 0 for every mode and made the force system singular.
-pub fn unit_load_displacement(omega: f64, zeta: f64, tau: f64) -> f64 {
-    if omega * tau > 0.5 {
-        Arc::new(omega, zeta, 0.0, 0.0, 1.0, 1.0, tau).xv(tau).0
-    } else {
-        load_series(omega, zeta, tau, 1, 0.0, 0.5 * tau * tau).0
-    }
-}
-
-/// ψ(τ): displacement at τ of a mode (ω, ζ) under a load rising linearly from 0 to 1 over τ,
-/// from rest: x'' + 2ζω x' + ω² x = t/τ, x(0) = x'(0) = 0.
-///
-/// For ωτ ≤ 0.5 by its Taylor series (a_0 = a_1 = a_2 = 0, a_3 = τ²/6, then the recurrence
-/// of [`unit_load_displacement`]), for the same reason: the closed form's particular and
-/// homogeneous parts are each about 1/ω², ψ ≈ τ²/6.
-pub fn unit_ramp_displacement(omega: f64, zeta: f64, tau: f64) -> f64 {
-    unit_ramp_response(omega, zeta, tau).0
-}
-
-/// (ψ(τ), ψ'(τ)): [`unit_ramp_displacement`] and the velocity at τ.
+/// For ωτ ≤ 0.5 by its Taylor series ([`ramp_series`]): the closed form's particular and
+/// homogeneous parts are each about 1/ω² while ψ ≈ τ²/6, so it loses every digit to
+/// cancellation when ωτ is small (as the constant load's closed form did on the very short
+/// segments Brent's method tries while locating a release: 0 for every mode, a singular
+/// force system).
 pub fn unit_ramp_response(omega: f64, zeta: f64, tau: f64) -> (f64, f64) {
     if omega * tau > 0.5 {
         Arc::new(omega, zeta, 0.0, 0.0, 0.0, 1.0, tau).xv(tau)
     } else {
-        load_series(omega, zeta, tau, 2, 0.0, tau * tau / 6.0)
+        ramp_series(omega, zeta, tau)
     }
 }
 
-/// The Taylor series Σ a_k of the displacement at τ of a mode loaded from rest whose load
-/// derivatives vanish from order `k0` on, given a_{k0} and a_{k0+1}, the earlier terms zero
-/// (converges for any ωτ; used for ωτ ≤ 0.5, where its terms fall at least as (ωτ)/k), and
-/// the velocity at τ, Σ k a_k / τ.
-fn load_series(omega: f64, zeta: f64, tau: f64, k0: usize, ak0: f64, ak1: f64) -> (f64, f64) {
+/// The Taylor series of [`unit_ramp_response`]: terms a_k = x⁽ᵏ⁾(0) τᵏ/k! with
+/// a_0 = a_1 = a_2 = 0, a_3 = τ²/6 and, from the equation,
+/// a_{k+2} = −(2ζωτ a_{k+1})/(k+2) − (ω²τ² a_k)/((k+1)(k+2)); ψ = Σ a_k, ψ' = Σ k a_k/τ.
+/// Converges for any ωτ; used for ωτ ≤ 0.5, where its terms fall at least as (ωτ)/k.
+fn ramp_series(omega: f64, zeta: f64, tau: f64) -> (f64, f64) {
     let wt = omega * tau;
     let (b, c) = (2.0 * zeta * wt, wt * wt);
     // a0 holds a_k, a1 holds a_{k+1}; the next term is a_{k+2}.
-    let (mut a0, mut a1) = (ak0, ak1);
-    let mut sum = a0 + a1;
-    let mut dsum = k0 as f64 * a0 + (k0 + 1) as f64 * a1;
+    let (mut a0, mut a1) = (0.0, tau * tau / 6.0);
+    let (mut sum, mut dsum) = (a1, 3.0 * a1);
     let r = &super::modal::RECIPROCALS;
-    for k in k0..80 {
+    for k in 2..80 {
         let kf = k as f64;
         // (Reciprocals from the table: the divisions were most of the held trials' cost.)
         let a2 = -(b * a1) * r[k + 2] - (c * a0) * (r[k + 1] * r[k + 2]);
@@ -115,10 +95,19 @@ fn load_series(omega: f64, zeta: f64, tau: f64, k0: usize, ak0: f64, ak1: f64) -
     (sum, dsum / tau)
 }
 
+/// The smallest holding force relative to its tolerance, and its index.
+fn weakest(lam: &[f64], tol: &[f64]) -> (f64, usize) {
+    lam.iter()
+        .zip(tol)
+        .enumerate()
+        .map(|(k, (l, t))| (l / t.max(f64::MIN_POSITIVE), k))
+        .fold((f64::INFINITY, 0), |a, b| if b.0 < a.0 { b } else { a })
+}
+
 /// End forces λ₁ (N per unit modal mass) of forces rising linearly from 0 to λ₁ over a
 /// segment on the persistent contacts `set` that move their end gaps by `delta` (the gaps
 /// being δ_end = `delta` − C λ₁, C_ab = Σ_n g_a,n g_b,n ψ_n, with `psi` the modes'
-/// [`unit_ramp_displacement`] over the segment): the solution of C λ₁ = `delta`.
+/// [`unit_ramp_response`] over the segment): the solution of C λ₁ = `delta`.
 pub fn ramp_end_forces(
     contacts: &[ContactGeom],
     set: &[usize],
@@ -197,7 +186,7 @@ impl Stepper<'_> {
 
     /// The held trajectory over [0, s] from the current state: forces linear in time from
     /// the instantaneous holding forces `lam0` at the start to the end forces that bring
-    /// every held gap back to δ = 0 at s (see [`persistent`]).
+    /// every held gap to its target at s ([`Stepper::held_target`]; see [`persistent`]).
     pub(super) fn held_trial(
         &self,
         set: &[usize],
@@ -221,13 +210,12 @@ impl Stepper<'_> {
                 s,
             )
         };
-        // Modal loads at the start (the instantaneous forces) and at the end.
+        // Modal loads −Σ_c g_c λ_c at the start (the instantaneous forces) and at the end.
+        let forces = |lam: &[f64]| -> Vec<(usize, f64)> {
+            set.iter().copied().zip(lam.iter().copied()).collect()
+        };
         let mut loads = vec![0.0; 2 * nm];
-        for (k, &c) in set.iter().enumerate() {
-            for (f, g) in loads[..nm].iter_mut().zip(&p.contacts[c].g) {
-                *f -= g * lam0[k];
-            }
-        }
+        impulse::apply(&p.contacts, &forces(lam0), &mut loads[..nm]);
         // The end state with the start forces falling to 0 over s; the end forces, rising
         // from 0, close the gaps, and add ψ_n(s), ψ'_n(s) per unit modal load to it.
         let (mut x, mut v) = (vec![0.0; nm], vec![0.0; nm]);
@@ -258,11 +246,7 @@ impl Stepper<'_> {
                 memo.0 = s;
             }
             let lam = ramp_end_forces(&p.contacts, set, &memo.1, &dpart, self.s.t)?;
-            for (k, &c) in set.iter().enumerate() {
-                for (f, g) in loads[nm..].iter_mut().zip(&p.contacts[c].g) {
-                    *f -= g * lam[k];
-                }
-            }
+            impulse::apply(&p.contacts, &forces(&lam), &mut loads[nm..]);
             for n in 0..nm {
                 x[n] += loads[nm + n] * memo.1[n];
                 v[n] += loads[nm + n] * memo.2[n];
@@ -292,10 +276,11 @@ impl Stepper<'_> {
     /// within `momentum.held_tolerance` × max(gap, 1 mm), the distance the held gaps may stray
     /// anyway, or within twice the contact's round-off band, else 0 (m). A residual left by
     /// an event (a segment cut by a closure, whose held gaps [`Stepper::close_held_gaps`]
-    /// closes to the band's edge: seen 1e-18 m outside it after round-off) is so kept rather than closed by forces that grow as 1/τ²
-    /// on a short segment (and whose path strays from the straight one by 3/8 of the
-    /// residual at the middle whatever τ: below a tolerance of about 1e-9 that stopped runs);
-    /// the velocity projection at every segment end keeps it from drifting.
+    /// closes to the band's edge: seen 1e-18 m outside it after round-off) is so kept
+    /// rather than closed by forces that grow as 1/τ² on a short segment (and whose path
+    /// strays from the straight one by 3/8 of the residual at the middle whatever τ: below a
+    /// tolerance of about 1e-9 that stopped runs); the velocity projection at every segment
+    /// end keeps it from drifting.
     fn held_target(&self, c: usize) -> f64 {
         let ct = &self.p.contacts[c];
         let d = ct.delta(&self.s.x);
@@ -333,12 +318,7 @@ impl Stepper<'_> {
     ) -> Result<(f64, usize), SolverError> {
         let a1 = self.p.ground(self.s.j, self.s.t + s);
         let (lam, tol) = self.holding_forces(set, x, v, a1, self.s.t + s)?;
-        Ok(lam
-            .iter()
-            .zip(&tol)
-            .enumerate()
-            .map(|(k, (l, t))| (l / t.max(f64::MIN_POSITIVE), k))
-            .fold((f64::INFINITY, 0), |a, b| if b.0 < a.0 { b } else { a }))
+        Ok(weakest(&lam, &tol))
     }
 
     /// The longest held segment up to `tau` whose gaps stray at most
@@ -362,7 +342,7 @@ impl Stepper<'_> {
         set: &[usize],
         lam0: &[f64],
         mut tau: f64,
-    ) -> Result<(f64, HeldTrial), SolverError> {
+    ) -> Result<(f64, HeldTrial, (f64, usize)), SolverError> {
         let p = self.p;
         let m = &p.modal;
         let tol = p.options.held_tolerance;
@@ -384,11 +364,14 @@ impl Stepper<'_> {
                 })
                 .collect()
         };
-        // (ratio to the tolerance, the power of τ it falls with) of the worst criterion.
-        let deviation = |st: &Self, trial: &HeldTrial, s: f64| -> Result<(f64, f64), SolverError> {
+        // (ratio to the tolerance, the power of τ it falls with) of the worst criterion, and
+        // the weakest holding force at the trial's end ([`Stepper::force_at`]'s value, for
+        // the release check of the segment taken).
+        type Deviation = ((f64, f64), (f64, usize));
+        let deviation = |st: &Self, trial: &HeldTrial, s: f64| -> Result<Deviation, SolverError> {
             let (t, t_mid) = (st.s.t + s, st.s.t + 0.5 * s);
             let (a1, am) = (p.ground(st.s.j, t), p.ground(st.s.j, t_mid));
-            let (lam_end, _) = st.holding_forces(set, &trial.x, &trial.v, a1, t)?;
+            let (lam_end, tol_end) = st.holding_forces(set, &trial.x, &trial.v, a1, t)?;
             let (lam_mid, _) = st.holding_forces(set, &trial.mid, &trial.mid_v, am, t_mid)?;
             let mut worst = (0.0, 4.0);
             let flex = flex(s);
@@ -403,11 +386,11 @@ impl Stepper<'_> {
                     }
                 }
             }
-            Ok(worst)
+            Ok((worst, weakest(&lam_end, &tol_end)))
         };
         let tau_asked = tau;
         let mut trial = self.held_trial(set, lam0, tau, true)?;
-        let (mut dev, mut power) = deviation(self, &trial, tau)?;
+        let ((mut dev, mut power), mut end) = deviation(self, &trial, tau)?;
         let mut shortenings = 0;
         // A segment under 1e-12 of the length asked for is refused even where it meets the
         // tolerance: there the state barely changes in floating point (at a tolerance of
@@ -415,17 +398,17 @@ impl Stepper<'_> {
         // until the driver's no-progress guard stopped it 100 000 segments later).
         while shortenings < HELD_SHORTENINGS && tau >= 1e-12 * tau_asked {
             if dev <= 1.0 {
-                return Ok((tau, trial));
+                return Ok((tau, trial, end));
             }
             // Aim at 0.7 of the tolerance, within [1/10, 1/2] of the length.
             tau *= (0.7 / dev).powf(1.0 / power).clamp(0.1, 0.5);
             shortenings += 1;
             self.diag.held_subdivisions += 1;
             trial = self.held_trial(set, lam0, tau, true)?;
-            (dev, power) = deviation(self, &trial, tau)?;
+            ((dev, power), end) = deviation(self, &trial, tau)?;
         }
         if dev <= 1.0 && tau >= 1e-12 * tau_asked {
-            return Ok((tau, trial));
+            return Ok((tau, trial, end));
         }
         // Never reached on 4 000 random scenes at the default tolerance or at 1e-8: each
         // shortening at least halves τ, so after 40 of them the segment is 1e-12 of the
@@ -522,8 +505,7 @@ impl Stepper<'_> {
             return Ok(self.release(set[k]));
         }
         let cap = self.held_cap.map_or(tau_grid, |c| c.min(tau_grid));
-        let (tau, trial) = self.held_accurate_length(&set, &lam0, cap)?;
-        let (f_end, k_end) = self.force_at(&set, tau, &trial.x, &trial.v)?;
+        let (tau, trial, (f_end, k_end)) = self.held_accurate_length(&set, &lam0, cap)?;
         let (s_hold, release) = if f_end < -1.0 {
             // The force turns tensile inside: locate where (f(0) ≥ −1 ≥ f(τ)).
             let err = std::cell::RefCell::new(None);
@@ -589,82 +571,54 @@ impl Stepper<'_> {
 mod tests {
     use super::*;
 
-    /// The series agrees with the closed form where the latter is accurate (ωτ ≥ 0.3, at
-    /// most a factor 1/(ωτ)² ≈ 11 of cancellation), matches the first three Taylor terms
-    /// for tiny τ (where the closed form returns 0), and is exact for the undamped mode.
-    #[test]
-    fn unit_load_displacement_is_accurate_for_short_and_long_segments() {
-        let (w, z) = (20.0, 0.05);
-        for wt in [0.3, 0.4, 0.5, 1.0, 3.0] {
-            let tau = wt / w;
-            let closed = Arc::new(w, z, 0.0, 0.0, 1.0, 1.0, tau).xv(tau).0;
-            let series = load_series(w, z, tau, 1, 0.0, 0.5 * tau * tau).0;
-            assert!(
-                (series - closed).abs() <= 1e-13 * closed,
-                "ωτ = {wt}: {series} vs {closed}"
-            );
-        }
-        for tau in [1e-17, 1e-10, 1e-6] {
-            let x = unit_load_displacement(w, z, tau);
-            let wt = w * tau;
-            // τ²/2 − ζωτ³/3 + (4ζ² − 1)ω²τ⁴/24; the next term is O((ωτ)³) relative.
-            let taylor =
-                0.5 * tau * tau * (1.0 - 2.0 * z * wt / 3.0 + (4.0 * z * z - 1.0) * wt * wt / 12.0);
-            assert!(
-                x > 0.0 && (x - taylor).abs() <= (wt.powi(3) + 1e-15) * taylor,
-                "{tau}: {x} vs {taylor}"
-            );
-        }
-        // Undamped, ωτ = 0.5: (1 − cos ωτ)/ω² = 2 sin²(ωτ/2)/ω².
-        let x = unit_load_displacement(w, 0.0, 0.5 / w);
-        let exact = 2.0 * (0.25f64).sin().powi(2) / (w * w);
-        assert!(
-            (x - exact).abs() <= 4.0 * f64::EPSILON * exact,
-            "{x} vs {exact}"
-        );
-    }
-
     /// The ramp's series (displacement and velocity) agrees with the closed form where the
     /// latter is accurate (ωτ ≥ 0.3: ψ ≈ τ²/6 against parts of 1/ω², at most a factor
-    /// 6/(ωτ)² ≈ 67 of cancellation), is
-    /// exact for the undamped mode, Σ_k (−1)^k ω^{2k} τ^{2k+2}/(2k+3)! (no cancellation), and
-    /// a constant load is the sum of a rising and a falling ramp: χ = ψ + φ, where φ, the
-    /// falling ramp's response, is computed here by the closed form.
+    /// 6/(ωτ)² ≈ 67 of cancellation; ψ' ≈ τ/2, a factor 2/(ωτ)² ≈ 22); a constant load is the
+    /// sum of a rising and a falling ramp (χ = ψ + φ, χ and φ by the closed form); and the
+    /// undamped mode is exact down to τ = 1e-17 s, where the closed form returns 0:
+    /// ψ = Σ_k (−1)^k ω^{2k} τ^{2k+2}/(2k+3)!, ψ' = Σ_k (−1)^k ω^{2k} τ^{2k+1}/(2k+2)!
+    /// (no cancellation).
     #[test]
-    fn unit_ramp_displacement_is_accurate_for_short_and_long_segments() {
+    fn unit_ramp_response_is_accurate_for_short_and_long_segments() {
         let (w, z) = (20.0, 0.05);
         for wt in [0.3, 0.4, 0.5, 1.0, 3.0] {
             let tau = wt / w;
             let closed = Arc::new(w, z, 0.0, 0.0, 0.0, 1.0, tau).xv(tau);
-            let series = load_series(w, z, tau, 2, 0.0, tau * tau / 6.0);
+            let series = ramp_series(w, z, tau);
             assert!(
                 (series.0 - closed.0).abs() <= 1e-13 * closed.0,
                 "ωτ = {wt}: {series:?} vs {closed:?}"
             );
-            // The velocity ψ'(τ) ≈ τ/2 (parts of 1/(ω²τ): a factor 2/(ωτ)² ≈ 22 less).
             assert!(
                 (series.1 - closed.1).abs() <= 1e-13 * closed.1,
                 "ωτ = {wt}: {series:?} vs {closed:?}"
             );
             let falling = Arc::new(w, z, 0.0, 0.0, 1.0, 0.0, tau).xv(tau).0;
-            let chi = unit_load_displacement(w, z, tau);
-            let psi = unit_ramp_displacement(w, z, tau);
+            let chi = Arc::new(w, z, 0.0, 0.0, 1.0, 1.0, tau).xv(tau).0;
+            let psi = unit_ramp_response(w, z, tau).0;
             assert!(
                 (psi + falling - chi).abs() <= 1e-13 * chi,
                 "ωτ = {wt}: {psi} + {falling} vs {chi}"
             );
         }
         for tau in [1e-17, 1e-10, 1e-6, 0.5 / w, 0.02 / w] {
-            let x = unit_ramp_displacement(w, 0.0, tau);
+            let (x, v) = unit_ramp_response(w, 0.0, tau);
             let (mut term, mut exact) = (tau * tau / 6.0, 0.0);
+            let (mut vterm, mut vexact) = (0.5 * tau, 0.0);
             for k in 0..30 {
                 exact += term;
+                vexact += vterm;
                 let kf = k as f64;
                 term *= -(w * tau).powi(2) / ((2.0 * kf + 4.0) * (2.0 * kf + 5.0));
+                vterm *= -(w * tau).powi(2) / ((2.0 * kf + 3.0) * (2.0 * kf + 4.0));
             }
             assert!(
                 x > 0.0 && (x - exact).abs() <= 4.0 * f64::EPSILON * exact,
                 "{tau}: {x} vs {exact}"
+            );
+            assert!(
+                v > 0.0 && (v - vexact).abs() <= 4.0 * f64::EPSILON * vexact,
+                "{tau}: {v} vs {vexact}"
             );
         }
     }
