@@ -121,6 +121,8 @@
 //! | 1000 … 3999 | touching neighbours in the impact | 6 | 0 | 0 |
 //! | 0 … 999 | linear holding forces | 9 | 0 | 0 |
 //! | 1000 … 3999 | linear holding forces | 24 | 0 | 0 |
+//! | 0 … 999 | held segment lengths | 4 | 0 | 0 |
+//! | 1000 … 3999 | held segment lengths | 9 | 0 | 0 |
 //!
 //! **Touching neighbours in the impact.** An impact's problem held the impacting and the held
 //! contacts; an impulse that pushed a touching neighbour into approach started a sequence of
@@ -144,15 +146,24 @@
 //! next start is held to the tolerance too (docs/solvers.md, defect 11): the ten held scenes
 //! below pass, 7035 is at 2.8e-3; energy audits, refinement and the contact audit clean.
 //!
+//! **Held segment lengths.** Each held segment was tried at the record step and cut to at
+//! most a tenth, so most ended 10 to 20 times inside the held tolerance; now it is first
+//! tried at the length the previous one suggests (docs/solvers.md, defect 12). The held
+//! scenes' peaks converge more regularly with the tolerance (median fitted slope 0.90 against
+//! 0.77 over 1e-5 … 1e-8, seeds 0 … 1499), at about three times the difference at the same
+//! tolerance and under half the time; energy audits, refinement, history and the contact
+//! audit clean over 0 … 3999.
+//!
 //! Left failing on purpose (the default seeds pass; the sweeps do not):
 //! - *Held phases that do not converge tenfold to the impulse method's* with a 100 times
-//!   tighter held tolerance: seeds 65, 75, 113, 145, 360, 402, 541, 715, 851 (0 … 999) and
-//!   23 of 1000 … 3999 (1135, 1239, 1518, 1647, 1677, 1771, 1775, 1874, 2046, 2259, 2407,
-//!   2428, 2777, 2805, 2820, 3196, 3219, 3222, 3239, 3275, 3582, 3699, 3964), at differences
-//!   of 1.8e-9 … 2.7e-7 at the default tolerance and 1.1e-9 … 3.8e-8 at 1e-8: a floor of
-//!   about 1e-8 the held tolerance does not control (541: 9.7e-9 at 1e-8 and at 1e-10). The
-//!   ten that failed so before linear forces (196, 433, 540, 733, 949, 1155, 1355, 2100,
-//!   3236, 3904, at up to 5.1e-5) pass.
+//!   tighter held tolerance: seeds 532, 541, 631, 846 (0 … 999) and 1059, 1771, 2407, 2805,
+//!   3208, 3239, 3487, 3638 (1000 … 3999), at differences of 7.3e-9 … 2.2e-7 at the default
+//!   tolerance and 1.1e-9 … 5.3e-8 at 1e-8. Before defect 12, 32 failed so (65, 75,
+//!   113, 145, 360, 402, 541, 715, 851 and 23 of 1000 … 3999) at 1.8e-9 … 2.7e-7 and
+//!   1.1e-9 … 3.8e-8: a floor of about 1e-8 the held tolerance does not control (541:
+//!   9.7e-9 at 1e-8 and at 1e-10 then, 1.0e-8 at 1e-8 now). The ten that failed so before
+//!   linear forces (196, 433, 540, 733, 949, 1155, 1355, 2100, 3236, 3904, at up to 5.1e-5)
+//!   pass.
 //! - Seed 1490 (free flight, no held contacts): 135 against 138 impacts, not the impulse
 //!   method's integration error; as before.
 //! - Tried and not kept: deciding a contact its own plastic impact leaves touching at once
@@ -1197,11 +1208,13 @@ fn held_segment_regressions_run_clean() {
     }
 }
 
-/// Regressions of the linear holding forces (docs/solvers.md, defect 11), at the default held
-/// tolerance:
+/// Regressions of the linear holding forces (docs/solvers.md, defects 11 and 12):
 /// - seeds 540 and 733, whose held phases converged to the impulse method's only slowly under
-///   constant holding forces (peaks 2.2e-6 and 3.1e-6 apart at the default tolerance), now
-///   agree with it to 2.6e-9 and 3.5e-9 (asserted: 1e-8), with the same impacts;
+///   constant holding forces (peaks 2.2e-6 and 3.1e-6 apart at the default tolerance, 1.4e-6
+///   for 540 at 1e-8), now agree with it to 1.7e-8 and 1.5e-8 at the default held tolerance
+///   (asserted: 1e-7), with the same impacts, and in proportion to the held tolerance: 1.9e-10
+///   and 2.5e-10 at 1e-8 (asserted: a thirtieth of the default's; 33 and 35 times with the
+///   segment lengths of the release before, 2.6e-9 → 7.9e-11 and 3.5e-9 → 1.0e-10);
 /// - seed 402, where (while the linear forces were being built, before `Modal::held_arc` and
 ///   `Arc::ramp_work`) a held segment of 3e-10 s ramped its force steeply and the closed
 ///   form's cancellation booked −6e8 J to the contact account (the run stopped on its
@@ -1219,13 +1232,20 @@ fn linear_holding_forces_regressions() {
             !mom.persistent_contacts.is_empty(),
             "seed {seed}: no held phase"
         );
-        if let Err(e) = impact_diff(&mom, &imp) {
-            panic!("seed {seed}: {e}\n{}", case.what);
+        let mut tight = case.scene.clone();
+        tight.momentum.held_tolerance = HELD_TIGHT;
+        let mt = solvers::run(&tight, Method::Momentum, None)
+            .unwrap_or_else(|e| panic!("seed {seed} at {HELD_TIGHT:e}: {e}\n{}", case.what));
+        for o in [&mom, &mt] {
+            if let Err(e) = impact_diff(o, &imp) {
+                panic!("seed {seed}: {e}\n{}", case.what);
+            }
         }
-        let (d, at) = peak_diff(&mom, &imp);
+        let ((d, at), d_tight) = (peak_diff(&mom, &imp), peak_diff(&mt, &imp).0);
         assert!(
-            d < 1e-8,
-            "seed {seed}: peaks {d:.3e} apart ({at})\n{}",
+            d < 1e-7 && d_tight <= d / 30.0,
+            "seed {seed}: peaks {d:.3e} apart ({at}), {d_tight:.3e} at held tolerance \
+             {HELD_TIGHT:e}\n{}",
             case.what
         );
     }

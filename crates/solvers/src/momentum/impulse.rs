@@ -132,30 +132,69 @@ pub fn delassus(contacts: &[ContactGeom], set: &[usize]) -> Vec<Vec<f64>> {
 /// Solves the small dense system `a x = b` (Gaussian elimination, partial pivoting);
 /// `None` when `a` is singular or ill-conditioned: a pivot below 1e-12 of the largest
 /// diagonal entry, or a non-finite result.
-pub fn solve_checked(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Option<Vec<f64>> {
-    let n = b.len();
-    let scale = (0..n).map(|k| a[k][k].abs()).fold(0.0, f64::max);
-    for k in 0..n {
-        let p = (k..n).max_by(|&i, &j| a[i][k].abs().total_cmp(&a[j][k].abs()))?;
-        if !(a[p][k].abs() > 1e-12 * scale) {
-            return None;
-        }
-        a.swap(k, p);
-        b.swap(k, p);
-        for i in k + 1..n {
-            let f = a[i][k] / a[k][k];
-            for j in k..n {
-                a[i][j] -= f * a[k][j];
+pub fn solve_checked(a: Vec<Vec<f64>>, b: Vec<f64>) -> Option<Vec<f64>> {
+    Factored::new(a)?.solve(b)
+}
+
+/// A small dense matrix eliminated once ([`solve_checked`]'s Gaussian elimination with
+/// partial pivoting), so that several right-hand sides are solved with the same operations
+/// and the same bits as [`solve_checked`] gives each (the held contacts' Delassus matrix,
+/// solved for the holding forces at every held trial, changes only with the held set).
+#[derive(Debug, Clone)]
+pub struct Factored {
+    /// The eliminated matrix: its upper triangle, and below the diagonal the multipliers
+    /// a_ik / a_kk of step k at [i][k] (entries elimination no longer reads).
+    lu: Vec<Vec<f64>>,
+    /// The row exchanged with row k at step k.
+    pivots: Vec<usize>,
+}
+
+impl Factored {
+    /// Eliminates `a`, or `None` when it is singular or ill-conditioned (a pivot below
+    /// 1e-12 of the largest diagonal entry).
+    pub fn new(mut a: Vec<Vec<f64>>) -> Option<Factored> {
+        let n = a.len();
+        let scale = (0..n).map(|k| a[k][k].abs()).fold(0.0, f64::max);
+        let mut pivots = Vec::with_capacity(n);
+        for k in 0..n {
+            let p = (k..n).max_by(|&i, &j| a[i][k].abs().total_cmp(&a[j][k].abs()))?;
+            if !(a[p][k].abs() > 1e-12 * scale) {
+                return None;
             }
-            b[i] -= f * b[k];
+            a.swap(k, p);
+            pivots.push(p);
+            for i in k + 1..n {
+                let f = a[i][k] / a[k][k];
+                for j in k..n {
+                    a[i][j] -= f * a[k][j];
+                }
+                a[i][k] = f;
+            }
         }
+        Some(Factored { lu: a, pivots })
     }
-    let mut x = vec![0.0; n];
-    for k in (0..n).rev() {
-        let s: f64 = (k + 1..n).map(|j| a[k][j] * x[j]).sum();
-        x[k] = (b[k] - s) / a[k][k];
+
+    /// The solution x of a x = b, or `None` if it is not finite.
+    pub fn solve(&self, mut b: Vec<f64>) -> Option<Vec<f64>> {
+        let (a, n) = (&self.lu, self.lu.len());
+        // The row exchanges first (later ones moved the stored multipliers with their rows),
+        // then each row takes the same subtractions, in the same order, as it did during the
+        // elimination.
+        for (k, &p) in self.pivots.iter().enumerate() {
+            b.swap(k, p);
+        }
+        for k in 0..n {
+            for i in k + 1..n {
+                b[i] -= a[i][k] * b[k];
+            }
+        }
+        let mut x = vec![0.0; n];
+        for k in (0..n).rev() {
+            let s: f64 = (k + 1..n).map(|j| a[k][j] * x[j]).sum();
+            x[k] = (b[k] - s) / a[k][k];
+        }
+        x.iter().all(|v| v.is_finite()).then_some(x)
     }
-    x.iter().all(|v| v.is_finite()).then_some(x)
 }
 
 /// Solves W x = b for the Delassus matrix W of `set`, or says that it is singular or
@@ -391,5 +430,34 @@ mod tests {
         assert_eq!(p, vec![(0, alone[0])]);
         // All active at the start (the drop-only loop's start) gives the same.
         assert_eq!(lcp_impulses(&c, &[0, 1], &[2.0, -2.0], 2, 0.0).unwrap(), p);
+    }
+
+    /// One elimination solves several right-hand sides: a system that needs row exchanges
+    /// (a zero leading pivot) against its exact solutions, the same matrix refused when
+    /// singular.
+    #[test]
+    fn an_eliminated_matrix_solves_each_right_hand_side() {
+        let a = vec![
+            vec![0.0, 2.0, 1.0],
+            vec![1.0, 1.0, 0.0],
+            vec![3.0, 0.0, 1.0],
+        ];
+        let f = Factored::new(a.clone()).unwrap();
+        for x in [[1.0, 2.0, 3.0], [-0.5, 0.25, 4.0]] {
+            let b: Vec<f64> = a
+                .iter()
+                .map(|r| r.iter().zip(&x).map(|(p, q)| p * q).sum())
+                .collect();
+            let got = f.solve(b.clone()).unwrap();
+            for (g, w) in got.iter().zip(&x) {
+                assert!(
+                    (g - w).abs() <= 8.0 * f64::EPSILON * w.abs().max(1.0),
+                    "{got:?} vs {x:?}"
+                );
+            }
+            assert_eq!(Some(got), solve_checked(a.clone(), b));
+        }
+        let singular = vec![vec![1.0, 2.0], vec![2.0, 4.0]];
+        assert!(Factored::new(singular).is_none());
     }
 }

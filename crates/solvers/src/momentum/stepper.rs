@@ -83,7 +83,9 @@ pub struct Diagnostics {
     /// most 1 plus round-off; a larger value is an impact resolved away from the contact
     /// surface (floors through each other, or apart).
     pub impact_gap_ratio: f64,
-    /// Held segments shortened for accuracy (`momentum.held_tolerance`).
+    /// Held segments taken (their accuracy checked: `Stepper::held_accurate_length`), and
+    /// trials of them shortened for accuracy (`momentum.held_tolerance`).
+    pub held_segments: u64,
     pub held_subdivisions: u64,
 }
 
@@ -112,6 +114,9 @@ pub struct Stepper<'a> {
     /// The longest held segment (s) while a touching contact keeps being found closing at
     /// the start of held segments (`Stepper::persistent_segment`); `None`: no cap.
     pub(super) held_cap: Option<f64>,
+    /// The length the last accepted held segment suggests for the next one
+    /// (`persistent::HeldLength`).
+    pub(super) held_next: Option<super::persistent::HeldLength>,
     /// Round-off band of each gap, m: 1e-9 · max(gap, 1 mm).
     pub(super) pen: Vec<f64>,
     pub(super) xn: Vec<f64>,
@@ -172,9 +177,9 @@ pub struct Stepper<'a> {
     pub(super) held_force_start: Vec<f64>,
     /// Scratch: the contact forces at a sample.
     pub(super) held_force_now: Vec<f64>,
-    /// The unit ramp responses ψ_n(τ) and their velocities ψ'_n(τ) of the last held-segment
-    /// length τ asked for (`persistent::unit_ramp_response`), NaN before the first.
-    pub(super) psi_memo: std::cell::RefCell<(f64, Vec<f64>, Vec<f64>)>,
+    /// The held trials' buffers: ψ of the last length, the modes' transcendental parts and
+    /// the held set's eliminated Delassus matrix (`persistent::HeldScratch`).
+    pub(super) held_scratch: std::cell::RefCell<super::persistent::HeldScratch>,
     /// Overlap audit of facing floors without a contact ([`crate::overlap`]).
     pub overlaps: OverlapTracker,
     /// Per audited pair: coefficients of u_left − u_right on all modes (φ_left − φ_right).
@@ -371,6 +376,7 @@ impl<'a> Stepper<'a> {
             last_impacts: vec![VecDeque::new(); p.contacts.len()],
             grazing: vec![false; p.contacts.len()],
             held_cap: None,
+            held_next: None,
             pen: p.contacts.iter().map(|c| 1e-9 * c.gap.max(1e-3)).collect(),
             xn: vec![0.0; nm],
             vn: vec![0.0; nm],
@@ -415,7 +421,7 @@ impl<'a> Stepper<'a> {
             held_force: vec![0.0; p.contacts.len()],
             held_force_start: vec![0.0; p.contacts.len()],
             held_force_now: vec![0.0; p.contacts.len()],
-            psi_memo: std::cell::RefCell::new((f64::NAN, Vec::new(), Vec::new())),
+            held_scratch: std::cell::RefCell::new(super::persistent::HeldScratch::new()),
             overlap_rows: Vec::new(),
             overlaps: OverlapTracker::new(scene),
             disp_lower: vec![0.0; nb * fs],
