@@ -242,14 +242,30 @@ impl Search {
         dd1: f64,
     ) -> Option<f64> {
         let (lo, tau) = (self.lo, self.hi);
-        if self.shift > 0.0 && dd0 < 0.0 && dd1 > 0.0 && d1 + self.shift >= 0.0 {
+        if self.shift > 0.0 && dd1 > 0.0 && d1 + self.shift >= 0.0 {
             // A contact not yet re-armed (searched at δ = shift) that falls and rises again
             // within the window to δ ≥ 0: if its gap opened beyond −shift at the minimum, it
-            // is re-armed there and the closure is the crossing of δ = 0 after it.
-            let s_min = self.brent(c, lo, tau, true);
-            if self.delta(c, s_min) + self.shift < -self.shift {
-                self.shift = 0.0;
-                return Some(self.brent(c, s_min, tau, false));
+            // is re-armed there and the closure is the crossing of δ = 0 after it. Whether it
+            // falls first is read from δ̇₀ where the curve agrees on its sign, else from δ̇ a
+            // moment later (AT_REST_PROBE of the window): after a plastic impulse δ̇₀ is
+            // round-off of either sign. Read from δ̇₀ alone, a contact at rest that dipped
+            // 3e-10 m (22 bands) and came back was found closing at δ = shift, late by
+            // shift/δ̇ = 5.8e-7 s (random seed 541, c_r = 0: its capture, and the ~1e-8 floor
+            // of its peaks against the impulse method).
+            let start = lo + (tau - lo) * AT_REST_PROBE;
+            let falls_from = if dd0 < 0.0 && c.rate(lo) < 0.0 {
+                Some(lo)
+            } else if c.rate(start) < 0.0 {
+                Some(start)
+            } else {
+                None
+            };
+            if let Some(from) = falls_from {
+                let s_min = self.brent(c, from, tau, true);
+                if self.delta(c, s_min) + self.shift < -self.shift {
+                    self.shift = 0.0;
+                    return Some(self.brent(c, s_min, tau, false));
+                }
             }
         }
         if d0 >= 0.0 {
@@ -527,6 +543,33 @@ mod tests {
             let (r, _) = locate([shift, 1e-16, -0.21, 0.0, 0.0], bounded, shift);
             assert_eq!(r, None);
         }
+    }
+
+    /// A contact not yet re-armed, at rest at δ = 0 after a plastic impulse (δ̇₀ round-off of
+    /// either sign), that dips 22 bands deep and rises through 0 within the window
+    /// (δ = −a s² + b s³ + round-off s): re-armed at the minimum, it closes at the crossing of
+    /// δ = 0 (s = a/b), whichever the sign of δ̇₀, with or without bounds. Read from δ̇₀ > 0
+    /// alone it was found at δ = shift, late by about shift/δ̇ (random seed 541: 5.8e-7 s, its
+    /// capture). A dip shallower than the band is not re-armed (δ = shift).
+    #[test]
+    fn a_resolved_contact_at_rest_that_dips_beyond_its_band_closes_at_zero() {
+        let shift = 1e-9;
+        // a = 0.5, b = 0.8: δ(s) = s²(0.8 s − 0.5), zero at 0.625, minimum −0.065 at 5/12.
+        for rate0 in [1e-17, -1e-17] {
+            let c = [0.0, rate0, -0.5, 0.8, 0.0];
+            for bounded in [true, false] {
+                let (r, search) = locate(c, bounded, shift);
+                let s = r.unwrap_or_else(|| panic!("missed ({rate0}, bounded {bounded})"));
+                assert!((s - 0.625).abs() < 1e-12, "{rate0} {bounded}: {s}");
+                assert_eq!(search.shift, 0.0, "re-armed");
+            }
+        }
+        // Dipping 0.065e-9 (a fifteenth of the band) and rising through the band: at δ = shift.
+        let c = [0.0, 1e-17, -0.5e-9, 0.8e-9 + 2.0 * shift, 0.0];
+        let exact = first_reach(c, shift).unwrap();
+        let (r, search) = locate(c, true, shift);
+        assert!((r.unwrap() - exact).abs() < 1e-12, "{r:?} vs {exact}");
+        assert_eq!(search.shift, shift);
     }
 
     /// A touching contact approaching (8.6e-3 m/s) that turns back below its start within the
