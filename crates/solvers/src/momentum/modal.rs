@@ -935,7 +935,11 @@ impl Arc {
         if s == 0.0 {
             return 0.0;
         }
-        let t = self.series_terms(s);
+        Self::series_damping_from(&self.series_terms(s), s)
+    }
+
+    /// [`Arc::series_damping`] from the terms at s ([`Arc::series_terms`], s > 0).
+    fn series_damping_from(t: &[f64; SERIES_TERMS], s: f64) -> f64 {
         let u: [f64; SERIES_TERMS] = std::array::from_fn(|k| k as f64 * t[k] / s);
         let mut sum = 0.0;
         for j in (1..SERIES_TERMS).rev() {
@@ -954,7 +958,11 @@ impl Arc {
     #[cold]
     #[inline(never)]
     fn series_load_work(&self, s: f64) -> f64 {
-        let t = self.series_terms(s);
+        self.series_load_work_from(&self.series_terms(s), s)
+    }
+
+    /// [`Arc::series_load_work`] from the terms at s.
+    fn series_load_work_from(&self, t: &[f64; SERIES_TERMS], s: f64) -> f64 {
         let mut w = 0.0;
         for k in (1..SERIES_TERMS).rev() {
             let kf = k as f64;
@@ -966,7 +974,11 @@ impl Arc {
     /// (∫₀ˢ q dσ/s − q₀, q(s) − ∫₀ˢ q dσ/s) of a series arc: Σ_{k ≥ 1} c_k s^k/(k+1) and
     /// Σ_{k ≥ 1} c_k s^k k/(k+1), each without the difference of two near-equal values.
     fn series_means(&self, s: f64) -> (f64, f64) {
-        let t = self.series_terms(s);
+        Self::series_means_from(&self.series_terms(s))
+    }
+
+    /// [`Arc::series_means`] from the terms at s.
+    fn series_means_from(t: &[f64; SERIES_TERMS]) -> (f64, f64) {
         let (mut m, mut y) = (0.0, 0.0);
         for k in (1..SERIES_TERMS).rev() {
             let kf = k as f64;
@@ -1103,6 +1115,48 @@ impl Arc {
             e2s,
             xm: x(-2.0 * c),
         }
+    }
+
+    /// A segment's energy parts over [0, s] (s > 0) given the end state (x1, v1) and
+    /// [`Arc::trig`] at s: the load's work ([`Arc::load_work`]) or, with `ramps` = (c₀, k)
+    /// of the ground's and the held contacts' parts of the load, their works
+    /// ([`Arc::ramp_work`]), and ∫₀ˢ q̇² dσ ([`Arc::damping_integral_from`]). The same values
+    /// and bits as those calls; a series arc forms its Taylor terms at s once for all three
+    /// (each formed them again, a chain of dependent operations, and the closed form's
+    /// damping kernels were computed and not used).
+    #[inline]
+    pub fn segment_energy(
+        &self,
+        s: f64,
+        x1: f64,
+        v1: f64,
+        t: [f64; 3],
+        ramps: Option<[(f64, f64); 2]>,
+    ) -> (f64, f64, f64) {
+        if !self.series {
+            let (w, wc) = match ramps {
+                None => (self.load_work(s, x1, v1), 0.0),
+                Some([(g0, gk), (c0, ck)]) => (
+                    self.ramp_work(s, x1, v1, g0, gk),
+                    self.ramp_work(s, x1, v1, c0, ck),
+                ),
+            };
+            return (w, wc, self.damping_integral_from(s, t));
+        }
+        let terms = self.series_terms(s);
+        let ramp = |c0: f64, k: f64| {
+            let dq = x1 - self.x0;
+            if k == 0.0 {
+                c0 * dq
+            } else {
+                c0 * dq + k * (s * Self::series_means_from(&terms).1)
+            }
+        };
+        let (w, wc) = match ramps {
+            None => (self.series_load_work_from(&terms, s), 0.0),
+            Some([(g0, gk), (c0, ck)]) => (ramp(g0, gk), ramp(c0, ck)),
+        };
+        (w, wc, Self::series_damping_from(&terms, s))
     }
 
     /// Work of the load ∫₀ˢ f q̇ dσ given the end state (x1, v1) = (q(s), q̇(s)), exact.
@@ -1322,6 +1376,45 @@ mod tests {
             let tol = 32.0 * f64::EPSILON * (1.0 + 1.0 / (wh * wh)) * scale;
             assert!((w_fold - w_ref).abs() <= tol, "{w_fold} {w_ref} {tol}");
             assert!((d_fold - d_ref).abs() <= tol, "{d_fold} {d_ref} {tol}");
+        }
+    }
+
+    /// A segment's energy parts in one call are those of the separate calls, bit for bit,
+    /// for closed-form and series arcs, with and without held ramps.
+    #[test]
+    fn segment_energy_is_the_separate_calls_bit_for_bit() {
+        let mut next = stream(7);
+        for series in [false, true] {
+            for _ in 0..200 {
+                let (w, z) = (next(1.0, 60.0), next(0.0, 0.2));
+                let s = next(1e-5, 5e-3);
+                let a = Arc::new(
+                    w,
+                    z,
+                    next(-1e-2, 1e-2),
+                    next(-0.5, 0.5),
+                    next(-5.0, 5.0),
+                    next(-5.0, 5.0),
+                    s,
+                )
+                .series_if(series);
+                let t = a.trig(s);
+                let (x1, v1) = a.xv_from(s, t);
+                let damping = a.damping_integral_from(s, t);
+                assert_eq!(
+                    a.segment_energy(s, x1, v1, t, None),
+                    (a.load_work(s, x1, v1), 0.0, damping)
+                );
+                let ramps = [(next(-5.0, 5.0), next(-1e3, 1e3)), (next(-5.0, 5.0), 0.0)];
+                assert_eq!(
+                    a.segment_energy(s, x1, v1, t, Some(ramps)),
+                    (
+                        a.ramp_work(s, x1, v1, ramps[0].0, ramps[0].1),
+                        a.ramp_work(s, x1, v1, ramps[1].0, ramps[1].1),
+                        damping
+                    )
+                );
+            }
         }
     }
 

@@ -1107,21 +1107,15 @@ impl<'a> Stepper<'a> {
                 // (linear over tau) to the contact account: split before the integration by
                 // parts of `load_work`, whose cancellation the steep force ramps of very short
                 // held segments would amplify.
-                let (w, wc) = match fc {
-                    None => (a.load_work(s_end, x1, v1), 0.0),
-                    Some(f) => {
-                        let (c0, c1) = (f[n], f[m.len() + n]);
-                        let (g0, g1) = (-m.gamma[n] * a0, -m.gamma[n] * a1);
-                        (
-                            a.ramp_work(s_end, x1, v1, g0, (g1 - g0) / tau),
-                            a.ramp_work(s_end, x1, v1, c0, (c1 - c0) / tau),
-                        )
-                    }
-                };
+                let ramps = fc.map(|f| {
+                    let (c0, c1) = (f[n], f[m.len() + n]);
+                    let (g0, g1) = (-m.gamma[n] * a0, -m.gamma[n] * a1);
+                    [(g0, (g1 - g0) / tau), (c0, (c1 - c0) / tau)]
+                });
+                let (w, wc, damping) = a.segment_energy(s_end, x1, v1, t, ramps);
                 self.energy.input += w;
                 self.energy.contact -= wc;
-                self.energy.damping +=
-                    2.0 * m.zeta[n] * m.omega[n] * a.damping_integral_from(s_end, t);
+                self.energy.damping += 2.0 * m.zeta[n] * m.omega[n] * damping;
             }
             self.s.x[n] = x1;
             self.s.v[n] = v1;
