@@ -242,6 +242,8 @@ impl Search {
         dd1: f64,
     ) -> Option<f64> {
         let (lo, tau) = (self.lo, self.hi);
+        // Where a contact at rest (δ̇₀ round-off) reads its direction.
+        let start = lo + (tau - lo) * AT_REST_PROBE;
         if self.shift > 0.0 && dd1 > 0.0 && d1 + self.shift >= 0.0 {
             // A contact not yet re-armed (searched at δ = shift) that falls and rises again
             // within the window to δ ≥ 0: if its gap opened beyond −shift at the minimum, it
@@ -252,7 +254,6 @@ impl Search {
             // 3e-10 m (22 bands) and came back was found closing at δ = shift, late by
             // shift/δ̇ = 5.8e-7 s (random seed 541, c_r = 0: its capture, and the ~1e-8 floor
             // of its peaks against the impulse method).
-            let start = lo + (tau - lo) * AT_REST_PROBE;
             let falls_from = if dd0 < 0.0 && c.rate(lo) < 0.0 {
                 Some(lo)
             } else if c.rate(start) < 0.0 {
@@ -282,7 +283,6 @@ impl Search {
             // seed 3927 in the momentum method: δ̇₀ = ±2.8e-17 m/s, −0.53 m/s²; `Stalled`),
             // and a contact rising from rest after a graze went through (seed 433:
             // δ̇₀ = +1e-16 m/s, falling first, then 8 bands up).
-            let start = lo + (tau - lo) * AT_REST_PROBE;
             if c.rate(start) >= 0.0 {
                 if d1 >= 0.0 {
                     return Some(lo);

@@ -212,10 +212,11 @@ fn persistent_contact_converges_to_the_momentum_method_as_its_held_tolerance_fal
         slopes.iter().all(|s| (0.7..=1.3).contains(s)),
         "slopes (peaks, release times, impact times) {slopes:?}: {rows:?}, impulse floor {floor:e}"
     );
-    assert!(
-        rows.iter().all(|r| r.1 > floor || r.1 <= 2.0 * floor),
-        "{rows:?}"
-    );
+    // Once at this method's error, the peaks stay there (within twice it) as the tolerance
+    // falls further.
+    if let Some(i) = rows.iter().position(|r| r.1 <= floor) {
+        assert!(rows[i..].iter().all(|r| r.1 <= 2.0 * floor), "{rows:?}");
+    }
     // At the default tolerance (1e-6) the peaks agree to 1e-8 (1.8e-7 with constant forces).
     assert!(rows[1].1 < 1e-8, "{rows:?}");
 }

@@ -1144,17 +1144,19 @@ impl Arc {
             return (w, wc, self.damping_integral_from(s, t));
         }
         let terms = self.series_terms(s);
-        let ramp = |c0: f64, k: f64| {
-            let dq = x1 - self.x0;
-            if k == 0.0 {
-                c0 * dq
-            } else {
-                c0 * dq + k * (s * Self::series_means_from(&terms).1)
-            }
-        };
         let (w, wc) = match ramps {
             None => (self.series_load_work_from(&terms, s), 0.0),
-            Some([(g0, gk), (c0, ck)]) => (ramp(g0, gk), ramp(c0, ck)),
+            Some([(g0, gk), (c0, ck)]) => {
+                let tail = if gk != 0.0 || ck != 0.0 {
+                    s * Self::series_means_from(&terms).1
+                } else {
+                    0.0
+                };
+                (
+                    self.ramp_work_with(x1, g0, gk, tail),
+                    self.ramp_work_with(x1, c0, ck, tail),
+                )
+            }
         };
         (w, wc, Self::series_damping_from(&terms, s))
     }
@@ -1186,18 +1188,29 @@ impl Arc {
     /// gave a contact work of −6e8 J for about 0.)
     #[inline]
     pub fn ramp_work(&self, s: f64, x1: f64, v1: f64, c0: f64, k: f64) -> f64 {
-        let dq = x1 - self.x0;
         if k == 0.0 {
-            return c0 * dq;
+            return self.ramp_work_with(x1, c0, k, 0.0);
         }
         let tail = if self.series {
             s * self.series_means(s).1
         } else {
+            let dq = x1 - self.x0;
             let int_f = self.f0 * s + 0.5 * self.g * s * s;
             let iq = (int_f - (v1 - self.v0) - 2.0 * self.c * dq) / (self.omega * self.omega);
             s * x1 - iq
         };
-        c0 * dq + k * tail
+        self.ramp_work_with(x1, c0, k, tail)
+    }
+
+    /// [`Arc::ramp_work`] given its tail s q(s) − ∫₀ˢ q dσ (unused where k = 0).
+    #[inline]
+    fn ramp_work_with(&self, x1: f64, c0: f64, k: f64, tail: f64) -> f64 {
+        let dq = x1 - self.x0;
+        if k == 0.0 {
+            c0 * dq
+        } else {
+            c0 * dq + k * tail
+        }
     }
 }
 

@@ -67,17 +67,11 @@ const HELD_SHORTENINGS: usize = 40;
 /// homogeneous parts are each about 1/ω² while ψ ≈ τ²/6, so it loses every digit to
 /// cancellation when ωτ is small (as the constant load's closed form did on the very short
 /// segments Brent's method tries while locating a release: 0 for every mode, a singular
-/// force system).
-pub fn unit_ramp_response(omega: f64, zeta: f64, tau: f64) -> (f64, f64) {
-    let ramp = Arc::new(omega, zeta, 0.0, 0.0, 0.0, 1.0, tau);
-    unit_ramp_response_from(omega, zeta, tau, || ramp.trig(tau))
-}
-
-/// [`unit_ramp_response`] with the transcendental part [e^{−ζωτ}, sin ω_d τ, cos ω_d τ]
-/// from `trig` (asked for only where the closed form is used; it is every arc's of the
-/// mode at τ, [`Arc::trig`], so a held trial computes it once for its arcs and ψ).
+/// force system). Otherwise by the closed form, with the transcendental part
+/// [e^{−ζωτ}, sin ω_d τ, cos ω_d τ] from `trig` (every arc's of the mode at τ,
+/// [`Arc::trig`]: a held trial computes it once for its arcs and ψ).
 #[inline]
-pub fn unit_ramp_response_from(
+pub fn unit_ramp_response(
     omega: f64,
     zeta: f64,
     tau: f64,
@@ -193,6 +187,8 @@ pub(super) struct HeldScratch {
     /// search or a segment after a shortened trial asks for it again).
     psi: Vec<f64>,
     dpsi: Vec<f64>,
+    /// Every mode's (ζω, ω_d) as `Arc::new` forms them, once per run.
+    cd: Vec<(f64, f64)>,
     /// The arguments −ζ_nω_n s, ω_dn s and [`Arc::trig`]'s values of every mode at the
     /// trial's end, then at its middle.
     p: Vec<f64>,
@@ -219,12 +215,19 @@ impl HeldScratch {
     /// [`Arc::trig`] of every mode at s into (e, sn, cs) (the same bits, in vectors).
     fn trig_at(&mut self, m: &super::modal::Modal, s: f64, mid: bool) {
         let nm = m.len();
+        if self.cd.len() != nm {
+            // The expressions of `Arc::new`.
+            self.cd = (0..nm)
+                .map(|n| {
+                    let (w, z) = (m.omega[n], m.zeta[n]);
+                    (z * w, w * (1.0 - z * z).sqrt())
+                })
+                .collect();
+        }
         self.p.clear();
         self.q.clear();
-        for n in 0..nm {
-            // The expressions of `Arc::new` (c, d) and `Arc::trig` (−c s, d s).
-            let (w, z) = (m.omega[n], m.zeta[n]);
-            let (c, d) = (z * w, w * (1.0 - z * z).sqrt());
+        for &(c, d) in &self.cd {
+            // `Arc::trig`'s arguments (−c s, d s).
             self.p.push(-c * s);
             self.q.push(d * s);
         }
@@ -346,7 +349,7 @@ impl Stepper<'_> {
             sc.dpsi.clear();
             for n in 0..nm {
                 let t = trig(sc, n);
-                let (r, dr) = unit_ramp_response_from(m.omega[n], m.zeta[n], s, || t);
+                let (r, dr) = unit_ramp_response(m.omega[n], m.zeta[n], s, || t);
                 sc.psi.push(r);
                 sc.dpsi.push(dr);
             }
@@ -718,6 +721,10 @@ mod tests {
     /// (no cancellation).
     #[test]
     fn unit_ramp_response_is_accurate_for_short_and_long_segments() {
+        let unit_ramp_response = |w: f64, z: f64, tau: f64| {
+            let trig = Arc::new(w, z, 0.0, 0.0, 0.0, 1.0, tau).trig(tau);
+            super::unit_ramp_response(w, z, tau, || trig)
+        };
         let (w, z) = (20.0, 0.05);
         for wt in [0.3, 0.4, 0.5, 1.0, 3.0] {
             let tau = wt / w;
