@@ -85,8 +85,8 @@ fn plastic_pair_releases_where_the_holding_force_turns_tensile() {
             .first()
             .unwrap_or_else(|| panic!("dt {dt}: no persistent phase: {:?}", out.impacts));
         assert_eq!(first.released_by, "tension");
-        // The phase starts once the gap has closed by its round-off band (1e-12 m here,
-        // reached after 6e-5 s: δ grows as t³ from the plastic impact).
+        // The phase starts once the gap has closed by its round-off band (1e-13 m here,
+        // reached after 2.7e-5 s: δ grows as t³ from the plastic impact).
         assert!(first.start < 1e-4, "{first:?}");
         errs.push((first.end - t_release).abs() / t_release);
         // Round-off of the energy (measured 3e-16 to 7e-15: a margin of over 150).

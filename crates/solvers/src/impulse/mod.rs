@@ -30,7 +30,7 @@
 //!   the momentum method ([`crate::closure`]: interior maxima of δ, a contact just resolved
 //!   closing again between falling ends, a contact touching at the window start; without
 //!   the closed form's derivative bounds, so without its filters), the same re-arming band
-//!   (a contact just resolved is found closing only at δ = 1e-9·max(gap, 1 mm) until its
+//!   (a contact just resolved is found closing only at δ = 1e-10·max(gap, 1 mm) until its
 //!   gap has opened beyond that band) and the same
 //!   simultaneity window (closures within 1e-12 s are solved together);
 //! - release of a held contact: min_c λ_c/band_c crosses −1, band_c = 1e-9 of the sizes of

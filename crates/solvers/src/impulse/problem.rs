@@ -13,8 +13,8 @@ pub(super) struct Problem<'a> {
     pub sys: &'a System,
     /// One row per scene contact in mass-scaled coordinates ([`contact::geometry`]).
     pub geoms: Vec<ContactGeom>,
-    /// Round-off band of each gap, m: 1e-9 · max(gap, 1 mm) (the momentum method's
-    /// re-arming band).
+    /// Round-off band of each gap, m: [`crate::closure::band`], 1e-10 · max(gap, 1 mm) (the
+    /// momentum method's re-arming band).
     pub pen: Vec<f64>,
     /// The momentum method's base step h (record step, or T_min/8 without a record): the
     /// chattering-capture rule compares impact intervals with it, s.
@@ -30,7 +30,7 @@ impl<'a> Problem<'a> {
         };
         Problem {
             sys,
-            pen: geoms.iter().map(|c| 1e-9 * c.gap.max(1e-3)).collect(),
+            pen: geoms.iter().map(|c| crate::closure::band(c.gap)).collect(),
             geoms,
             capture_h,
         }

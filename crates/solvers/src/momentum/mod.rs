@@ -54,8 +54,9 @@
 //! `capture_velocity` is an impact. One found closed while separating is ignored; one
 //! touching (|δ̇| ≤ `capture_velocity`) joins a persistent-contact phase if holding it needs
 //! a compressive force and grazes otherwise (its tiny approach speed is removed). A contact
-//! just resolved is re-armed only once its gap has left a round-off band of 1e-9·max(gap,
-//! 1 mm) m, so a touching pair is never found closing again and again at one state.
+//! just resolved is re-armed only once its gap has left a round-off band of 1e-10·max(gap,
+//! 1 mm) m ([`crate::closure::band`]), so a touching pair is never found closing again and
+//! again at one state.
 //!
 //! **Chattering** ([`persistent`]): when (c_r < 1) the impact intervals on a contact shrink
 //! geometrically with a remaining accumulation time below one record step (the record's,

@@ -117,7 +117,7 @@ pub struct Stepper<'a> {
     /// The length the last accepted held segment suggests for the next one
     /// (`persistent::HeldLength`).
     pub(super) held_next: Option<super::persistent::HeldLength>,
-    /// Round-off band of each gap, m: 1e-9 · max(gap, 1 mm).
+    /// Round-off band of each gap, m: [`crate::closure::band`], 1e-10 · max(gap, 1 mm).
     pub(super) pen: Vec<f64>,
     pub(super) xn: Vec<f64>,
     pub(super) vn: Vec<f64>,
@@ -377,7 +377,11 @@ impl<'a> Stepper<'a> {
             grazing: vec![false; p.contacts.len()],
             held_cap: None,
             held_next: None,
-            pen: p.contacts.iter().map(|c| 1e-9 * c.gap.max(1e-3)).collect(),
+            pen: p
+                .contacts
+                .iter()
+                .map(|c| crate::closure::band(c.gap))
+                .collect(),
             xn: vec![0.0; nm],
             vn: vec![0.0; nm],
             work_acc: [[0.0; 4]; 2],
