@@ -171,16 +171,39 @@
 //!   others (65, 75, 113, 145, 360, 402, 541, 715, 851 and 23 of 1000 … 3999); before linear
 //!   forces ten more (196, 433, 540, 733, 949, 1155, 1355, 2100, 3236, 3904, at up to
 //!   5.1e-5). All pass now.
-//! - Seed 1490 (free flight, no held contacts): 135 against 138 impacts, not the impulse
-//!   method's integration error; as before.
-//! - Held out (4000 … 7999): the free-flight impact-count differences 6016, 6471 and 7228,
-//!   and 4923 (one impact more at the tight held tolerance); 7225 (an event storm where the
-//!   impulse method runs) and 4601 (a storm on its refined record).
+//! - Seed 1490 (free flight, no held contacts), listed here for many releases as 135 against
+//!   138 impacts "not the impulse method's integration error", was: the impulse method finds
+//!   135, 147, 138, 138, 135, 136 and 135 impacts at tolerances 1e-8 … 1e-14, its peaks
+//!   1.2e-1, 1.6e-2, 4.0e-2, 1.9e-2, 1.4e-3, 1.6e-4 and 1.6e-5 from the momentum method's,
+//!   tenfold per decade from 1e-12 on: it converges to the momentum method's answer, but only
+//!   past the test's two extra decades. The test now tries a third (1e-14); 1490 passes, and
+//!   so does the held-out 6016.
+//! - Held out (4000 … 7999): 6471 and 7228 (free flight), where the impulse method's impact
+//!   count still changes at 1e-15 (6471: 22, 25, 25, 25, 25, 26, 25 impacts at 1e-9 … 1e-15
+//!   against the momentum method's 26; 7228: 69 … 74 against 74, peaks 1.2e-3 apart at 1e-15)
+//!   and a round-off change of the record moves the momentum method's peaks by 3.2e-3 and
+//!   3.0e-4 with the same impacts: chaotic rattles that this comparison cannot close; 7225
+//!   (an event storm where the impulse method runs) and 4601 (a storm on its refined
+//!   record). 4923 (held; 45 impacts at every held tolerance against the impulse method's
+//!   46 at 1e-11 and 1e-12) is the impulse method's error too: at 1e-13 it finds the 45,
+//!   1.2e-9 from the momentum method's peaks, having moved 8.8e-8 from 1e-11; the held
+//!   comparison now retries the impulse method two decades tighter when the impacts differ.
 //! - The gap element's integrators (`gap_element_integrators_agree`, first swept over
-//!   1000 … 3999 in defect 15's release; it does not read the band): 2065 (Newmark's balance
-//!   error 1.0e-9 over 44 200 steps, above its 16ε per step), 2141, 2315 and 2880 (the
+//!   1000 … 7999 in defect 15's release; it does not read the band): 2065 and, held out,
+//!   5516 (Newmark's balance error 1.0e-9 over 44 200 steps and 2.6e-9 over 76 800, above its
+//!   16ε per step), 2141, 2315 and 2880 (the
 //!   adaptive integrator's balance error 1.2e-9 … 3.5e-9 at tolerance 1e-8, 2.5e-10 …
-//!   3.7e-10 at 1e-10).
+//!   3.7e-10 at 1e-10: 3.3 to 9.6 times smaller, not the ten asked; the errors change sign
+//!   between tolerances, and over 1e-6 … 1e-12 they fall about tenfold per decade, to
+//!   3.5e-12 … 5.0e-12: the test now retries at 1e-12 and asks a hundredfold below the
+//!   larger of the two, which the three pass). 2065 is Newmark's
+//!   Newton tolerance, not round-off: at Δt = 1e-4 s the residual of a contact-free step
+//!   after one solve is 5.4e-11 of its force scale (median of 13 543 such steps; the
+//!   acceleration formed from displacement increments cancels), inside the 1e-10 that
+//!   accepts it; converged to 1e-13 the balance error is 1.0e-10, but the paper scene's
+//!   Newmark run then takes 79 892 Newton iterations instead of 39 968 (its balance error
+//!   was round-off already, 3e-13 of the input): not changed. The adaptive three were not
+//!   diagnosed.
 //! - Tried and not kept: deciding a contact its own plastic impact leaves touching at once
 //!   from its holding force, in both methods (docs/solvers.md, "What is left").
 
@@ -704,103 +727,121 @@ const HELD_TIGHT: f64 = 1e-8;
 /// converge to the exact one.
 #[test]
 fn momentum_matches_the_impulse_method() {
-    sweep("impulse", |c| {
-        let (mom, imp) = match (
-            solvers::run(&c.scene, Method::Momentum, None),
-            impulse_at(&c.scene, TOL_FINE),
-        ) {
-            (Ok(a), Ok(b)) => (a, b),
-            (Err(a), Err(b)) => {
-                return Verdict::Skip(format!("both fail: {} / {}", kind(&a), kind(&b)))
-            }
-            (a, b) => {
-                return Verdict::Fail(format!(
-                    "momentum {} / impulse {}",
-                    a.err().map_or("Ok".into(), |e| e.to_string()),
-                    b.err().map_or("Ok".into(), |e| e.to_string())
-                ))
-            }
+    sweep("impulse", impulse_verdict);
+}
+
+/// Invariant 2 on one scene (the sweep's check; [`held_verdict`] with held contacts).
+fn impulse_verdict(c: &Case) -> Verdict {
+    let (mom, imp) = match (
+        solvers::run(&c.scene, Method::Momentum, None),
+        impulse_at(&c.scene, TOL_FINE),
+    ) {
+        (Ok(a), Ok(b)) => (a, b),
+        (Err(a), Err(b)) => {
+            return Verdict::Skip(format!("both fail: {} / {}", kind(&a), kind(&b)))
+        }
+        (a, b) => {
+            return Verdict::Fail(format!(
+                "momentum {} / impulse {}",
+                a.err().map_or("Ok".into(), |e| e.to_string()),
+                b.err().map_or("Ok".into(), |e| e.to_string())
+            ))
+        }
+    };
+    if !grid_dependent(&mom) && !grid_dependent(&imp) {
+        let (pert, same) = round_off_response(&c.scene, &mom);
+        let impacts = impact_diff(&mom, &imp);
+        if impacts.is_err() && !same {
+            return Verdict::Skip("chaotic: a round-off change moves the impacts".into());
+        }
+        let (d, at) = peak_diff(&mom, &imp);
+        let coarse = match impulse_at(&c.scene, TOL_COARSE) {
+            Ok(o) => peak_diff(&mom, &o).0,
+            Err(e) => return Verdict::Fail(format!("impulse at tol {TOL_COARSE:e}: {e}")),
         };
-        if !grid_dependent(&mom) && !grid_dependent(&imp) {
-            let (pert, same) = round_off_response(&c.scene, &mom);
-            let impacts = impact_diff(&mom, &imp);
-            if impacts.is_err() && !same {
-                return Verdict::Skip("chaotic: a round-off change moves the impacts".into());
-            }
-            let (d, at) = peak_diff(&mom, &imp);
-            let coarse = match impulse_at(&c.scene, TOL_COARSE) {
-                Ok(o) => peak_diff(&mom, &o).0,
-                Err(e) => return Verdict::Fail(format!("impulse at tol {TOL_COARSE:e}: {e}")),
+        let o = overlap_diff(&mom, &imp);
+        if verbose() {
+            eprintln!(
+                "seed {}: impacts {} peaks {d:.3e} ({at}) at {TOL_FINE:e}, {coarse:.3e} at \
+                 {TOL_COARSE:e}; impacts {impacts:?}, overlaps {o:.3e}",
+                c.seed,
+                mom.impacts.len(),
+            );
+        }
+        let converging =
+            impacts.is_ok() && (d <= IMPULSE_FLOOR || d <= coarse / 10.0 || d <= 100.0 * pert);
+        if !converging {
+            // Some scenes amplify the integration error so much (stiff undamped sticks
+            // rattling through a hundred impacts) that the tolerance is not yet in its
+            // asymptotic range at TOL_FINE: two decades further, the same impacts and a
+            // difference that still shrinks (at least 3 times per decade, 10 expected),
+            // or three decades further, the same impacts and a hundredfold closer.
+            let tighter: Vec<_> = [TOL_FINE / 10.0, TOL_FINE / 100.0]
+                .iter()
+                .map(|&tol| impulse_at(&c.scene, tol))
+                .collect();
+            let diffs: Vec<Option<f64>> = tighter
+                .iter()
+                .map(|r| {
+                    r.as_ref()
+                        .ok()
+                        .filter(|i| impact_diff(&mom, i).is_ok())
+                        .map(|i| peak_diff(&mom, i).0)
+                })
+                .collect();
+            let mut recovered = match (diffs[0], diffs[1]) {
+                (Some(a), Some(b)) => b <= IMPULSE_FLOOR || b <= a / 3.0,
+                _ => false,
             };
-            let o = overlap_diff(&mom, &imp);
-            if verbose() {
-                eprintln!(
-                    "seed {}: impacts {} peaks {d:.3e} ({at}) at {TOL_FINE:e}, {coarse:.3e} at \
-                     {TOL_COARSE:e}; impacts {impacts:?}, overlaps {o:.3e}",
-                    c.seed,
-                    mom.impacts.len(),
-                );
+            // A long elastic rattle can need a third decade: seed 1490 (135 impacts,
+            // c_r = 1, an undamped stick) finds 138, 135 and 136 impacts at 1e-11, 1e-12
+            // and 1e-13, then the momentum method's 135 at 1e-14 with peaks 1.6e-5 from
+            // its (1.9e-2 at 1e-11, 1.4e-3 at 1e-12): the impulse method converging to
+            // the momentum method's answer, not yet in its asymptotic range at 1e-13.
+            if !recovered {
+                recovered = impulse_at(&c.scene, TOL_FINE / 1000.0)
+                    .ok()
+                    .filter(|i| impact_diff(&mom, i).is_ok())
+                    .is_some_and(|i| {
+                        let e = peak_diff(&mom, &i).0;
+                        e <= IMPULSE_FLOOR || e <= d / 100.0
+                    });
             }
-            let converging =
-                impacts.is_ok() && (d <= IMPULSE_FLOOR || d <= coarse / 10.0 || d <= 100.0 * pert);
-            if !converging {
-                // Some scenes amplify the integration error so much (stiff undamped sticks
-                // rattling through a hundred impacts) that the tolerance is not yet in its
-                // asymptotic range at TOL_FINE: two decades further, the same impacts and a
-                // difference that still shrinks (at least 3 times per decade, 10 expected).
-                let tighter: Vec<_> = [TOL_FINE / 10.0, TOL_FINE / 100.0]
-                    .iter()
-                    .map(|&tol| impulse_at(&c.scene, tol))
-                    .collect();
-                let diffs: Vec<Option<f64>> = tighter
-                    .iter()
-                    .map(|r| {
-                        r.as_ref()
-                            .ok()
-                            .filter(|i| impact_diff(&mom, i).is_ok())
-                            .map(|i| peak_diff(&mom, i).0)
-                    })
-                    .collect();
-                let recovered = match (diffs[0], diffs[1]) {
-                    (Some(a), Some(b)) => b <= IMPULSE_FLOOR || b <= a / 3.0,
-                    _ => false,
+            if !recovered {
+                let what = match impacts {
+                    Err(e) => format!("at tol {TOL_FINE:e}: {e}"),
+                    Ok(_) => format!(
+                        "peaks differ by {coarse:.3e} at tol {TOL_COARSE:e} and {d:.3e} \
+                         at {TOL_FINE:e} ({at})"
+                    ),
                 };
-                if !recovered {
-                    let what = match impacts {
-                        Err(e) => format!("at tol {TOL_FINE:e}: {e}"),
-                        Ok(_) => format!(
-                            "peaks differ by {coarse:.3e} at tol {TOL_COARSE:e} and {d:.3e} \
-                             at {TOL_FINE:e} ({at})"
-                        ),
-                    };
-                    return Verdict::Fail(format!(
-                        "{what}; at tol {:e} and {:e}: {diffs:?}: not the impulse method's \
-                         integration error (a round-off change of the record moves the momentum \
-                         peaks by {pert:.3e})",
-                        TOL_FINE / 10.0,
-                        TOL_FINE / 100.0
-                    ));
-                }
-                return Verdict::Pass(vec![("free: converged only below the fine tolerance", 1.0)]);
-            }
-            let (dt, dv) = impacts.unwrap();
-            let mut v = vec![
-                ("free: peaks at the fine tolerance", d),
-                ("free: impact times at the fine tolerance (s)", dt),
-                ("free: impact velocities / approach", dv),
-                ("free: overlaps / largest displacement", o),
-            ];
-            if d > IMPULSE_FLOOR {
-                v.push((
-                    "free: fine / coarse peak difference (above floor)",
-                    d / coarse,
+                return Verdict::Fail(format!(
+                    "{what}; at tol {:e} and {:e}: {diffs:?}: not the impulse method's \
+                     integration error (a round-off change of the record moves the momentum \
+                     peaks by {pert:.3e})",
+                    TOL_FINE / 10.0,
+                    TOL_FINE / 100.0
                 ));
             }
-            v.push(("free: round-off response of the peaks", pert));
-            return Verdict::Pass(v);
+            return Verdict::Pass(vec![("free: converged only below the fine tolerance", 1.0)]);
         }
-        held_verdict(c, &mom, &imp)
-    });
+        let (dt, dv) = impacts.unwrap();
+        let mut v = vec![
+            ("free: peaks at the fine tolerance", d),
+            ("free: impact times at the fine tolerance (s)", dt),
+            ("free: impact velocities / approach", dv),
+            ("free: overlaps / largest displacement", o),
+        ];
+        if d > IMPULSE_FLOOR {
+            v.push((
+                "free: fine / coarse peak difference (above floor)",
+                d / coarse,
+            ));
+        }
+        v.push(("free: round-off response of the peaks", pert));
+        return Verdict::Pass(v);
+    }
+    held_verdict(c, &mom, &imp)
 }
 
 /// Invariant 2 with held contacts: the momentum method's held segments keep their gaps within
@@ -819,19 +860,37 @@ fn held_verdict(c: &Case, mom: &RunOutput, imp: &RunOutput) -> Verdict {
         Ok(o) => o,
         Err(e) => return Verdict::Fail(format!("momentum at held_tolerance {HELD_TIGHT:e}: {e}")),
     };
+    // The impulse method at TOL_FINE may not find the exact impacts yet: two decades further
+    // it must (held-out seed 4923: 46 impacts at 1e-11 and 1e-12, the momentum method's 45 at
+    // 1e-13, which finds them at every held tolerance), and it is then the reference.
+    let mut retried: Option<RunOutput> = None;
     if let Err(e) = impact_diff(&mt, imp) {
         if !round_off_response(&c.scene, &mt).1 {
             return Verdict::Skip("held, chaotic: a round-off change moves the impacts".into());
         }
-        return Verdict::Fail(format!("held contacts, held_tolerance {HELD_TIGHT:e}: {e}"));
+        match impulse_at(&c.scene, TOL_FINE / 100.0) {
+            Ok(i) if impact_diff(&mt, &i).is_ok() => retried = Some(i),
+            _ => {
+                return Verdict::Fail(format!(
+                    "held contacts, held_tolerance {HELD_TIGHT:e}: {e} (at the impulse \
+                     method's tolerances {TOL_FINE:e} and {:e})",
+                    TOL_FINE / 100.0
+                ))
+            }
+        }
     }
-    let d_tight = peak_diff(&mt, imp).0;
-    let d_default = peak_diff(mom, imp).0;
-    // The impulse method's own error at TOL_FINE is at most its change from TOL_COARSE.
-    let floor = match impulse_at(&c.scene, TOL_COARSE) {
-        Ok(o) => IMPULSE_FLOOR.max(peak_diff(imp, &o).0),
-        Err(e) => return Verdict::Fail(format!("impulse at tol {TOL_COARSE:e}: {e}")),
+    // The impulse method's own error at TOL_FINE is at most its change from TOL_COARSE; at
+    // TOL_FINE / 100, its change from TOL_FINE.
+    let floor = match &retried {
+        Some(i) => IMPULSE_FLOOR.max(peak_diff(i, imp).0),
+        None => match impulse_at(&c.scene, TOL_COARSE) {
+            Ok(o) => IMPULSE_FLOOR.max(peak_diff(imp, &o).0),
+            Err(e) => return Verdict::Fail(format!("impulse at tol {TOL_COARSE:e}: {e}")),
+        },
     };
+    let reference = retried.as_ref().unwrap_or(imp);
+    let d_tight = peak_diff(&mt, reference).0;
+    let d_default = peak_diff(mom, reference).0;
     if verbose() {
         eprintln!(
             "seed {}: held, peaks {d_default:.3e} at the default held_tolerance, \
@@ -848,11 +907,18 @@ fn held_verdict(c: &Case, mom: &RunOutput, imp: &RunOutput) -> Verdict {
              method's error)"
         ));
     }
-    Verdict::Pass(vec![
+    let mut v = vec![
         ("held: peaks at the default held_tolerance", d_default),
         ("held: peaks at the tight held_tolerance", d_tight),
         ("held: tight / bound", d_tight / bound),
-    ])
+    ];
+    if retried.is_some() {
+        v.push((
+            "held: impacts found only at the impulse method's 1e-13",
+            1.0,
+        ));
+    }
+    Verdict::Pass(v)
 }
 
 /// Relative peak difference allowed between the record and the same record refined: the
@@ -1073,88 +1139,113 @@ const NEWMARK_PEAKS: f64 = 0.5;
 /// spring model. Neither may panic (an error must be a typed `SolverError`, counted); both
 /// must close their energy balance (Newmark to round-off: 16ε per step, as `gap_energy.rs`
 /// states; the adaptive integrator's must follow its tolerance: at least 10 times smaller at
-/// tol 1e-10 than at 1e-8, measured 14 to 100 times, up to 150 × tol in size); their
+/// tol 1e-10 than at 1e-8, measured 14 to 100 times, up to 150 × tol in size, or else a
+/// hundred times below the larger of the two at 1e-12); their
 /// peaks must agree to `NEWMARK_PEAKS` when their contact episodes agree in number
 /// (near-grazing contacts switch on or off between the integrators: counted, skipped).
 #[test]
 fn gap_element_integrators_agree() {
-    sweep("gap", |c| {
-        let mut ad = c.scene.clone();
-        ad.gap_element.tolerance = 1e-10;
-        let mut loose = c.scene.clone();
-        loose.gap_element.tolerance = 1e-8;
-        let mut nm = c.scene.clone();
-        nm.gap_element.integrator = structure::scene::Integrator::Newmark;
-        nm.gap_element.time_step = NEWMARK_STEP;
-        let (a, b) = match (
-            solvers::run(&ad, Method::Gap, None),
-            solvers::run(&nm, Method::Gap, None),
-        ) {
-            (Ok(a), Ok(b)) => (a, b),
-            (a, b) => {
-                return Verdict::Skip(format!(
-                    "adaptive {} / newmark {}",
-                    a.err().map_or("Ok", |e| kind(&e)),
-                    b.err().map_or("Ok", |e| kind(&e))
-                ))
-            }
-        };
-        let balance = |o: &RunOutput| {
-            let e = &o.energy;
-            e.balance_error.abs() / e.input.abs().max(e.damping).max(e.initial)
-        };
-        let (ba, bn) = (balance(&a), balance(&b));
-        let steps = (c.scene.duration / NEWMARK_STEP).ceil();
-        let bl = match solvers::run(&loose, Method::Gap, None) {
+    sweep("gap", gap_verdict);
+}
+
+/// Invariant 5 on one scene (the sweep's check).
+fn gap_verdict(c: &Case) -> Verdict {
+    let mut ad = c.scene.clone();
+    ad.gap_element.tolerance = 1e-10;
+    let mut loose = c.scene.clone();
+    loose.gap_element.tolerance = 1e-8;
+    let mut nm = c.scene.clone();
+    nm.gap_element.integrator = structure::scene::Integrator::Newmark;
+    nm.gap_element.time_step = NEWMARK_STEP;
+    let (a, b) = match (
+        solvers::run(&ad, Method::Gap, None),
+        solvers::run(&nm, Method::Gap, None),
+    ) {
+        (Ok(a), Ok(b)) => (a, b),
+        (a, b) => {
+            return Verdict::Skip(format!(
+                "adaptive {} / newmark {}",
+                a.err().map_or("Ok", |e| kind(&e)),
+                b.err().map_or("Ok", |e| kind(&e))
+            ))
+        }
+    };
+    let balance = |o: &RunOutput| {
+        let e = &o.energy;
+        e.balance_error.abs() / e.input.abs().max(e.damping).max(e.initial)
+    };
+    let (ba, bn) = (balance(&a), balance(&b));
+    let steps = (c.scene.duration / NEWMARK_STEP).ceil();
+    let bl = match solvers::run(&loose, Method::Gap, None) {
+        Ok(o) => balance(&o),
+        Err(e) => return Verdict::Skip(format!("adaptive at tol 1e-8: {}", kind(&e))),
+    };
+    // The balance's terms are integrated with the motion: its error follows the
+    // tolerance (20 to 100 times smaller at a 100 times tighter one measured, 10 asked),
+    // whatever the scene's constant (up to 150 × tol measured here). The error changes
+    // sign as the tolerance falls, so one ratio can fail where the trend holds (seeds
+    // 2141, 2315, 2880: 3.3 to 9.6 times over 1e-8 … 1e-10, about tenfold per decade
+    // over 1e-6 … 1e-12): then two decades further must bring it a hundredfold below
+    // the larger of the two.
+    let mut retried = None;
+    if ba > 1e-12 && ba > bl / 10.0 {
+        let mut tight = c.scene.clone();
+        tight.gap_element.tolerance = 1e-12;
+        let bt = match solvers::run(&tight, Method::Gap, None) {
             Ok(o) => balance(&o),
-            Err(e) => return Verdict::Skip(format!("adaptive at tol 1e-8: {}", kind(&e))),
+            Err(e) => return Verdict::Skip(format!("adaptive at tol 1e-12: {}", kind(&e))),
         };
-        // The balance's terms are integrated with the motion: its error follows the
-        // tolerance (20 to 100 times smaller at a 100 times tighter one measured, 10 asked),
-        // whatever the scene's constant (up to 150 × tol measured here).
-        if ba > 1e-12 && ba > bl / 10.0 {
+        if !(bt <= bl.max(ba) / 100.0) {
             return Verdict::Fail(format!(
-                "adaptive gap element: balance error {bl:.3e} at tol 1e-8, {ba:.3e} at 1e-10"
+                "adaptive gap element: balance error {bl:.3e} at tol 1e-8, {ba:.3e} at \
+                 1e-10, {bt:.3e} at 1e-12"
             ));
         }
-        if !(bn <= 16.0 * f64::EPSILON * steps) {
-            return Verdict::Fail(format!(
-                "Newmark: balance error {bn:.3e} over {steps} steps (16ε per step: {:.3e})",
-                16.0 * f64::EPSILON * steps
-            ));
-        }
-        let (d, at) = peak_diff(&a, &b);
-        if verbose() {
-            eprintln!(
-                "seed {}: episodes {}/{} peaks {d:.3e} ({at}); balance {ba:.3e} / {bn:.3e}; \
-                 adaptive {:.3} s, newmark {:.3} s",
-                c.seed,
-                a.impacts.len(),
-                b.impacts.len(),
-                a.stats.wall_seconds,
-                b.stats.wall_seconds
-            );
-        }
-        let mut v = vec![
-            ("adaptive balance at tol 1e-10", ba),
-            ("adaptive balance 1e-10 / 1e-8", ba / bl),
-            (
-                "newmark balance / (16 eps steps)",
-                bn / (16.0 * f64::EPSILON * steps),
-            ),
-        ];
-        if a.impacts.len() != b.impacts.len() {
-            v.push(("peaks with different episode counts (not asserted)", d));
-            return Verdict::Pass(v);
-        }
-        if !(d <= NEWMARK_PEAKS) {
-            return Verdict::Fail(format!(
-                "Newmark at {NEWMARK_STEP:e} s and the adaptive integrator: peaks differ by {d:.3e} ({at})"
-            ));
-        }
-        v.push(("peaks", d));
-        Verdict::Pass(v)
-    });
+        retried = Some(bt);
+    }
+    if !(bn <= 16.0 * f64::EPSILON * steps) {
+        return Verdict::Fail(format!(
+            "Newmark: balance error {bn:.3e} over {steps} steps (16ε per step: {:.3e})",
+            16.0 * f64::EPSILON * steps
+        ));
+    }
+    let (d, at) = peak_diff(&a, &b);
+    if verbose() {
+        eprintln!(
+            "seed {}: episodes {}/{} peaks {d:.3e} ({at}); balance {ba:.3e} / {bn:.3e}; \
+             adaptive {:.3} s, newmark {:.3} s",
+            c.seed,
+            a.impacts.len(),
+            b.impacts.len(),
+            a.stats.wall_seconds,
+            b.stats.wall_seconds
+        );
+    }
+    let mut v = vec![
+        ("adaptive balance at tol 1e-10", ba),
+        ("adaptive balance 1e-10 / 1e-8", ba / bl),
+        (
+            "newmark balance / (16 eps steps)",
+            bn / (16.0 * f64::EPSILON * steps),
+        ),
+    ];
+    if let Some(bt) = retried {
+        v.push((
+            "adaptive balance 1e-12 / max(1e-8, 1e-10), retried",
+            bt / bl.max(ba),
+        ));
+    }
+    if a.impacts.len() != b.impacts.len() {
+        v.push(("peaks with different episode counts (not asserted)", d));
+        return Verdict::Pass(v);
+    }
+    if !(d <= NEWMARK_PEAKS) {
+        return Verdict::Fail(format!(
+            "Newmark at {NEWMARK_STEP:e} s and the adaptive integrator: peaks differ by {d:.3e} ({at})"
+        ));
+    }
+    v.push(("peaks", d));
+    Verdict::Pass(v)
 }
 
 /// A contact at rest after a plastic impact with a separating relative acceleration is not
@@ -1341,6 +1432,59 @@ fn the_held_comparison_has_no_band_floor() {
             Verdict::Skip(why) => panic!("seed {seed}: skipped ({why})\n{}", case.what),
             Verdict::Fail(why) => panic!("seed {seed}: {why}\n{}", case.what),
         }
+    }
+}
+
+/// Scenes whose comparison needed the impulse method (or the adaptive gap element) at a
+/// tighter tolerance than the sweep's first tries, each passing through the sweep's own
+/// check and on the branch it needs (the header lists the measurements):
+/// - 1490 and the held-out 6016 (free flight): the impulse method finds the momentum method's
+///   impacts only at 1e-14, a third decade past `TOL_FINE`;
+/// - held-out 4923 (held contacts): at 1e-13 (`held_verdict` retries two decades tighter);
+/// - 2141, 2315 and 2880: the adaptive gap element's balance error falls less than tenfold
+///   from tolerance 1e-8 to 1e-10 (its sign changes) and a hundredfold by 1e-12.
+#[test]
+fn comparisons_that_need_a_tighter_reference_pass() {
+    let flag = |v: &Verdict, name: &str| match v {
+        Verdict::Pass(values) => values.iter().any(|(n, _)| *n == name),
+        _ => false,
+    };
+    for (seed, branch) in [
+        (1490, "free: converged only below the fine tolerance"),
+        (6016, "free: converged only below the fine tolerance"),
+        (
+            4923,
+            "held: impacts found only at the impulse method's 1e-13",
+        ),
+    ] {
+        let case = draw(seed);
+        let v = impulse_verdict(&case);
+        assert!(
+            flag(&v, branch),
+            "seed {seed}: {branch}: {:?}\n{}",
+            kind_of(&v),
+            case.what
+        );
+    }
+    for seed in [2141, 2315, 2880] {
+        let case = draw(seed);
+        let v = gap_verdict(&case);
+        let branch = "adaptive balance 1e-12 / max(1e-8, 1e-10), retried";
+        assert!(
+            flag(&v, branch),
+            "seed {seed}: {:?}\n{}",
+            kind_of(&v),
+            case.what
+        );
+    }
+}
+
+/// A verdict's kind and message, for a failing assertion.
+fn kind_of(v: &Verdict) -> String {
+    match v {
+        Verdict::Pass(values) => format!("pass {values:?}"),
+        Verdict::Skip(why) => format!("skip: {why}"),
+        Verdict::Fail(why) => format!("fail: {why}"),
     }
 }
 
