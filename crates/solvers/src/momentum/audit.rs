@@ -13,9 +13,9 @@
 //!
 //! τ the length integrated. Wherever the search is right, δ_c stays at most 2·`pen_c`:
 //! `pen_c` = 1e-10·max(gap, 1 mm) m ([`crate::closure::band`]) is the round-off band in
-//! which a contact just resolved is searched (its closure is located at δ = 0, or at δ = pen until it is re-armed), and a
-//! touching contact that rises less than one more band before it falls back is taken for a
-//! round-off overlap, not a closure. The audit reports the largest δ_c / pen_c over the run
+//! which a contact just resolved is searched (its closure is located at δ = 0, or at
+//! δ = pen until it is re-armed), and a touching contact that rises less than one more band
+//! before it falls back is taken for a round-off overlap, not a closure. The audit reports the largest δ_c / pen_c over the run
 //! with its contact and instant: above 2 (beyond round-off) a closure was missed, and the
 //! excess times pen is how far the floors went through each other at a sample. Sampled, not continuous: an overlap shorter than τ/K can pass between
 //! the samples. It costs K evaluations of every arc per interval (an audited analysis of the
