@@ -108,6 +108,15 @@ pub struct EnergyAudit {
     pub final_: f64,
     /// initial + input − damping − contact − hysteretic − final.
     pub balance_error: f64,
+    /// Newmark only (`None`, and absent from the JSON, for the other solvers): the work
+    /// Σ Δuᵀ (r_n + r_{n+1})/2 of the equilibrium residuals r = p − M a − C v − K u − F_c that
+    /// its Newton iterations leave at the accepted steps (each within 1e-10 of the step's
+    /// force scale). Average-acceleration Newmark conserves the discrete energy exactly on
+    /// linear stories, so `balance_error` less this is round-off there: the balance error
+    /// is the convergence tolerance's, not the scheme's (a kinked yielding story adds its
+    /// O(Δt²) trapezoidal error).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub residual_work: Option<f64>,
 }
 
 impl EnergyAudit {
@@ -129,6 +138,7 @@ impl EnergyAudit {
             hysteretic,
             final_,
             balance_error: initial + input - damping - contact - hysteretic - final_,
+            residual_work: None,
         }
     }
 }

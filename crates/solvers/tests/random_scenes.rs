@@ -166,9 +166,8 @@
 //! (`the_held_comparison_has_no_band_floor` keeps the fourteen).
 //!
 //! What the sweeps still fail, and what they failed before (the default seeds pass). Over
-//! 0 … 3999 every invariant passes but the gap element's on 2065 (below); over the held-out
-//! 4000 … 7999, momentum against impulse fails on 6471 and 7228, the energy audits on 7225,
-//! refinement on 4601 and 7225, the gap element's integrators on 5516:
+//! 0 … 3999 every invariant passes; over the held-out 4000 … 7999, momentum against impulse
+//! fails on 6471 and 7228, the energy audits on 7225, refinement on 4601 and 7225:
 //! - Before defect 15, the thirteen held seeds above, at a floor of about 1e-8 that the held
 //!   tolerance did not control (541: 9.7e-9 at 1e-8 and at 1e-10); before defect 12, 32
 //!   others (65, 75, 113, 145, 360, 402, 541, 715, 851 and 23 of 1000 … 3999); before linear
@@ -206,7 +205,13 @@
 //!   (median of 13 543 such steps; the acceleration formed from displacement increments cancels),
 //!   inside the 1e-10 that accepts it; converged to 1e-13 the balance error is 1.0e-10, but the
 //!   paper scene's Newmark run then takes 79 892 Newton iterations instead of 39 968 (its balance
-//!   error was round-off already, 3e-13 of the input): not changed.
+//!   error was round-off already, 3e-13 of the input): not changed. Instead Newmark's audit now
+//!   reports the work of the residuals Newton leaves (`EnergyAudit::residual_work`), which the
+//!   average-acceleration scheme's exact discrete energy identity makes the balance error less
+//!   round-off: 2065's 1.002e-9 all but 3.6e-13, 5516's 2.610e-9 all but 4.7e-12. The check
+//!   asks the balance less that work within ε per step (16 times tighter than the 16ε it asked
+//!   of the balance; at most 0.28 ε per step over 0 … 7999): all 8000 seeds pass
+//!   (`newmark_balance_beyond_round_off_is_its_residual_work` keeps the two).
 //! - Tried and not kept: deciding a contact its own plastic impact leaves touching at once
 //!   from its holding force, in both methods (docs/solvers.md, "What is left").
 
@@ -1142,8 +1147,9 @@ const NEWMARK_PEAKS: f64 = 0.5;
 
 /// The gap element: adaptive (tol 1e-10) and Newmark (`NEWMARK_STEP`) integrate the same
 /// spring model. Neither may panic (an error must be a typed `SolverError`, counted); both
-/// must close their energy balance (Newmark to round-off: 16ε per step, as `gap_energy.rs`
-/// states; the adaptive integrator's must follow its tolerance: at least 10 times smaller at
+/// must close their energy balance (Newmark's, less the work of its Newton residuals, to
+/// round-off: ε per step, as `gap_energy.rs` states; the adaptive integrator's must follow
+/// its tolerance: at least 10 times smaller at
 /// tol 1e-10 than at 1e-8, measured 14 to 100 times, up to 150 × tol in size, or else a
 /// hundred times below the larger of the two at 1e-12); their
 /// peaks must agree to `NEWMARK_PEAKS` when their contact episodes agree in number
@@ -1151,6 +1157,14 @@ const NEWMARK_PEAKS: f64 = 0.5;
 #[test]
 fn gap_element_integrators_agree() {
     sweep("gap", gap_verdict);
+}
+
+/// Newmark's balance error less the work of its Newton residuals, relative to the scale of
+/// the balance's terms: the round-off of its sums.
+fn newmark_rest(o: &RunOutput) -> f64 {
+    let e = &o.energy;
+    let w = e.residual_work.expect("Newmark reports its residual work");
+    (e.balance_error - w).abs() / e.input.abs().max(e.damping).max(e.initial)
 }
 
 /// Invariant 5 on one scene (the sweep's check).
@@ -1208,10 +1222,18 @@ fn gap_verdict(c: &Case) -> Verdict {
         }
         retried = Some(bt);
     }
-    if !(bn <= 16.0 * f64::EPSILON * steps) {
+    // Newmark's balance error is the work of the residuals its Newton iterations leave
+    // (`residual_work`, each residual within 1e-10 of the step's force scale) plus the
+    // round-off of its sums: less that work, within ε per step (measured at most 0.28 ε per
+    // step over seeds 0 … 7999, on 5516). The balance itself stays within 16ε per step where
+    // Newton converges to round-off, not on 2065 and 5516 (1.0e-9 and 2.6e-9: 6.4 and 9.6
+    // times that).
+    let rn = newmark_rest(&b);
+    if !(rn <= f64::EPSILON * steps) {
         return Verdict::Fail(format!(
-            "Newmark: balance error {bn:.3e} over {steps} steps (16ε per step: {:.3e})",
-            16.0 * f64::EPSILON * steps
+            "Newmark: balance error {bn:.3e}, less its Newton residuals' work {rn:.3e}, over \
+             {steps} steps (ε per step: {:.3e})",
+            f64::EPSILON * steps
         ));
     }
     let (d, at) = peak_diff(&a, &b);
@@ -1232,6 +1254,10 @@ fn gap_verdict(c: &Case) -> Verdict {
         (
             "newmark balance / (16 eps steps)",
             bn / (16.0 * f64::EPSILON * steps),
+        ),
+        (
+            "newmark (balance - residual work) / (eps steps)",
+            rn / (f64::EPSILON * steps),
         ),
     ];
     if let Some(bt) = retried {
@@ -1516,6 +1542,43 @@ fn comparisons_that_need_a_tighter_reference_pass() {
         assert!(
             flag(&v, branch),
             "seed {seed}: {:?}\n{}",
+            kind_of(&v),
+            case.what
+        );
+    }
+}
+
+/// Seeds 2065 and 5516 (the second held out), where Newmark's energy balance at
+/// `NEWMARK_STEP` exceeds its round-off (16ε per step) because Newton accepts a step at a
+/// residual within 1e-10 of its force scale: the balance error is the work of those
+/// residuals, to round-off (measured: 1.002e-9 of which all but 3.6e-13, and 2.610e-9 of
+/// which all but 4.7e-12; asserted: all but 1 % and within ε per step), and the sweep's
+/// check passes on both.
+#[test]
+fn newmark_balance_beyond_round_off_is_its_residual_work() {
+    for seed in [2065, 5516] {
+        let case = draw(seed);
+        let mut nm = case.scene.clone();
+        nm.gap_element.integrator = structure::scene::Integrator::Newmark;
+        nm.gap_element.time_step = NEWMARK_STEP;
+        let o = solvers::run(&nm, Method::Gap, None)
+            .unwrap_or_else(|e| panic!("seed {seed}: {e}\n{}", case.what));
+        let e = &o.energy;
+        let steps = o.stats.steps as f64;
+        let balance = e.balance_error.abs() / e.input.abs().max(e.damping).max(e.initial);
+        assert!(
+            balance > 16.0 * f64::EPSILON * steps,
+            "seed {seed}: balance {balance:.3e} is round-off: pick another seed"
+        );
+        let rest = newmark_rest(&o);
+        assert!(
+            rest <= 1e-2 * balance && rest <= f64::EPSILON * steps,
+            "seed {seed}: balance {balance:.3e}, less the residual work {rest:.3e}"
+        );
+        let v = gap_verdict(&case);
+        assert!(
+            matches!(v, Verdict::Pass(_)),
+            "seed {seed}: {}\n{}",
             kind_of(&v),
             case.what
         );

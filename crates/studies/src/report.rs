@@ -280,8 +280,17 @@ pub fn run_summary(scene: &Scene, run: &RunOutput, amplification: Option<&[Vec<f
     s.push_str(&overlap_lines(run));
     let e = &run.energy;
     s.push_str(&format!(
-        "energy (J): initial {:.4e}, input {:.4e}, damping {:.4e}, contact {:.4e}, hysteretic {:.4e}, final {:.4e}, balance error {:.3e}\n",
-        e.initial, e.input, e.damping, e.contact, e.hysteretic, e.final_, e.balance_error
+        "energy (J): initial {:.4e}, input {:.4e}, damping {:.4e}, contact {:.4e}, hysteretic {:.4e}, final {:.4e}, balance error {:.3e}{}\n",
+        e.initial,
+        e.input,
+        e.damping,
+        e.contact,
+        e.hysteretic,
+        e.final_,
+        e.balance_error,
+        // Newmark: how much of the balance error its Newton residuals' work explains.
+        e.residual_work
+            .map_or(String::new(), |w| format!(" (Newton residuals' work {w:.3e})"))
     ));
     let st = &run.stats;
     s.push_str(&format!(

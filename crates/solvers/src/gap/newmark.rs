@@ -25,8 +25,12 @@
 //!   step without force; impulse by the trapezoidal rule.
 //! - Energy: input Σ −Δuᵀ M 1 ā_g, damping Σ Δt v̄ᵀ C v̄, contact work Σ Δδ F̄, hysteretic and
 //!   recoverable story energy from the committed story state (trapezoidal
-//!   sums, exact for the linear part of the scheme, so the balance error is the energy the
-//!   scheme creates or destroys at the contacts).
+//!   sums, exact for the linear part of the scheme). With Δu = Δt v̄ and Δv = Δt ā, the
+//!   equilibrium M a + C v + K u + F_c = p − r at both ends of a step, averaged and dotted
+//!   with Δu, gives ΔT + ΔV + Δt v̄ᵀ C v̄ + Δδ F̄ = Δuᵀ p̄ − Δuᵀ r̄: the balance error is the
+//!   work Σ Δuᵀ r̄ of the residuals r that Newton leaves (`EnergyAudit::residual_work`,
+//!   reported beside it) plus round-off, on linear stories; a yielding story whose step
+//!   crosses a kink adds its O(Δt²) trapezoidal error.
 //! - Peak responses and the overlap audit are taken at every step, as a finite-element
 //!   program reports them (between steps Newmark has no interpolant of its own accuracy,
 //!   so these are not continuous maxima). History: every step.
@@ -98,6 +102,11 @@ struct NewmarkStepper<'a> {
     e_in: f64,
     e_damp: f64,
     e_work: f64,
+    /// Work of the equilibrium residuals left at the accepted steps, J
+    /// ([`EnergyAudit::residual_work`]), and the residual at the step start (N; zero at
+    /// t = 0, where the acceleration is solved from equilibrium).
+    e_res: f64,
+    r_prev: Vec<f64>,
     u_new: Vec<f64>,
     v_new: Vec<f64>,
     a_new: Vec<f64>,
@@ -299,6 +308,8 @@ impl<'a> NewmarkStepper<'a> {
             e_in: 0.0,
             e_damp: 0.0,
             e_work: 0.0,
+            e_res: 0.0,
+            r_prev: vec![0.0; n],
             u_new,
             v_new,
             a_new,
@@ -528,6 +539,15 @@ impl<'a> NewmarkStepper<'a> {
                         let (d, dd) = kin(u_new, v_new, ci);
                         f_new[ci] = frozen(c, on[ci], d, dd, vc_trial[ci]).0;
                     }
+                    // The residual of the accepted state (`res` holds the update), for the
+                    // residual work of the energy audit.
+                    sys.internal(stories, u_new, v_new, f);
+                    for i in 0..n {
+                        res[i] = -sys.mass[i] * ag1 - sys.mass[i] * a_new[i] + f[i];
+                    }
+                    for (ci, c) in sys.contacts.iter().enumerate() {
+                        c.push_apart(res.as_mut_slice(), f_new[ci]);
+                    }
                     converged = true;
                     break;
                 }
@@ -605,6 +625,7 @@ impl<'a> NewmarkStepper<'a> {
         let nc = sys.contacts.len();
         let (dt, ag) = (self.dt, self.ag);
         let (mut e_in, mut e_damp, mut e_work) = (self.e_in, self.e_damp, self.e_work);
+        let mut e_res = self.e_res;
         let kin = |u: &[f64], v: &[f64], ci: usize| {
             let c = &sys.contacts[ci];
             (c.rel(u) - c.gap, c.rel(v))
@@ -629,13 +650,18 @@ impl<'a> NewmarkStepper<'a> {
             vc_trial,
             closed_now,
             opened_now,
+            res,
+            r_prev,
             ..
         } = self;
-        // Energy (trapezoidal sums).
+        // Energy (trapezoidal sums), and the work of the residuals left by Newton (the
+        // residual `res` of the accepted state, in the same trapezoidal rule).
         let agbar = 0.5 * (ag + ag1);
         for i in 0..n {
             e_in -= sys.mass[i] * (u_new[i] - u[i]) * agbar;
             vbar[i] = 0.5 * (v[i] + v_new[i]);
+            e_res += (u_new[i] - u[i]) * (0.5 * (r_prev[i] + res[i]));
+            r_prev[i] = res[i];
         }
         e_damp += dt * sys.internal(linear_stories, zero, vbar, f);
         closed_now.clear();
@@ -682,6 +708,7 @@ impl<'a> NewmarkStepper<'a> {
         self.e_in = e_in;
         self.e_damp = e_damp;
         self.e_work = e_work;
+        self.e_res = e_res;
         Ok(if closed_now.is_empty() && opened_now.is_empty() {
             StepOutcome::Accepted
         } else {
@@ -700,16 +727,19 @@ impl<'a> NewmarkStepper<'a> {
         let stored_t = sys.stored(u, |i| self.ledger.closed(i));
         let kin = |ci: usize| sys.contacts[ci].rel(v);
         let impacts = self.ledger.finish(t_end, |ci| (kin(ci), impulse[ci]));
-        let energy = audit(
-            self.initial,
-            self.e_in,
-            self.e_damp,
-            self.e_work,
-            self.stored0,
-            sys.mech_energy(&self.stories, u, v),
-            stored_t,
-            self.stories.hysteretic_energy(),
-        );
+        let energy = EnergyAudit {
+            residual_work: Some(self.e_res),
+            ..audit(
+                self.initial,
+                self.e_in,
+                self.e_damp,
+                self.e_work,
+                self.stored0,
+                sys.mech_energy(&self.stories, u, v),
+                stored_t,
+                self.stories.hysteretic_energy(),
+            )
+        };
         (impacts, energy, self.stats, self.stories)
     }
 }
