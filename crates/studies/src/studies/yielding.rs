@@ -1330,11 +1330,20 @@ impl Study for Yielding {
             .filter_map(|mi| walls[mi].median.zip(walls[0].median).map(|(a, b)| a / b))
             .reduce(f64::min);
         reading.push(format!(
-            "**Cost and what the speed buys** (table `yielding_cpu`; wall times of one run per case, cases side by side on a shared machine: indicative, and the only machine-dependent numbers of this summary). Median wall time per analysis with pounding: {}. Inside the domain of validity the elastic run gives the inelastic answer (previous paragraphs) at {} of the cost, and its own demand over strength says whether it is inside: so it can screen a record set or a parameter sweep ({}× more analyses for the same time), and only the records and levels where its demand exceeds the strength need an inelastic method. Outside the domain its speed buys an answer that is off by more than {:.0} % on most records.",
+            "**Cost and what the speed buys** (table `yielding_cpu`; wall times of one run per case, cases side by side on a shared machine: indicative, and the only machine-dependent numbers of this summary). Median wall time per analysis with pounding: {}. Inside the domain of validity the elastic run gives the inelastic answer (previous paragraphs) at {} of the cost, and its own demand over strength says whether it is inside: so it can screen a record set or a parameter sweep ({}× more analyses for the same time), and only the records and levels where its demand exceeds the strength need an inelastic method. Outside the domain its speed buys an answer that is off by more than {:.0} % on {}.",
             times.join("; "),
             speedup.map_or("a fraction".into(), |x| format!("1/{x:.0}")),
             speedup.map_or("–".into(), |x| format!("{x:.0}")),
-            100.0 * d.band
+            100.0 * d.band,
+            // The first inelastic method's self-check: departing pairs of those above.
+            match (self_summary.first(), d.inelastic.first()) {
+                (Some(s), Some(m)) => format!(
+                    "{} of the {} (record, level) pairs above the strength (against {m}, table `yielding_selfcheck`)",
+                    s.4, s.3
+                ),
+                _ => "the (record, level) pairs above the strength (table `yielding_selfcheck`)"
+                    .into(),
+            }
         ));
         if let Some(n) = failures_note(res) {
             reading.push(n);
