@@ -1368,11 +1368,7 @@ fn held_segment_regressions_run_clean() {
 #[test]
 fn linear_holding_forces_regressions() {
     for seed in [540, 733] {
-        let case = draw(seed);
-        let mom = solvers::run(&case.scene, Method::Momentum, None)
-            .unwrap_or_else(|e| panic!("seed {seed}: {e}\n{}", case.what));
-        let imp = impulse_at(&case.scene, TOL_FINE)
-            .unwrap_or_else(|e| panic!("seed {seed}: impulse {e}\n{}", case.what));
+        let (case, mom, imp) = pair(seed, None);
         assert!(
             !mom.persistent_contacts.is_empty(),
             "seed {seed}: no held phase"
@@ -1449,11 +1445,7 @@ fn the_held_comparison_has_no_band_floor() {
         532, 541, 631, 846, 1059, 1135, 1771, 2407, 2805, 3208, 3239, 3487, 3638, 4440,
     ];
     for seed in seeds {
-        let case = draw(seed);
-        let mom = solvers::run(&case.scene, Method::Momentum, None)
-            .unwrap_or_else(|e| panic!("seed {seed}: {e}\n{}", case.what));
-        let imp = impulse_at(&case.scene, TOL_FINE)
-            .unwrap_or_else(|e| panic!("seed {seed}: impulse {e}\n{}", case.what));
+        let (case, mom, imp) = pair(seed, None);
         assert!(
             !mom.persistent_contacts.is_empty(),
             "seed {seed}: no held phase (the scene no longer exercises the band)"
@@ -1597,10 +1589,18 @@ fn kind_of(v: &Verdict) -> String {
 /// Seed `seed`'s scene, its momentum run at held_tolerance [`HELD_TIGHT`] and its impulse run
 /// at [`TOL_FINE`] (panics, naming the seed, if either stops).
 fn tight_pair(seed: u64) -> (Case, RunOutput, RunOutput) {
+    pair(seed, Some(HELD_TIGHT))
+}
+
+/// Seed `seed`'s scene, its momentum run (at held tolerance `held`, else the scene's own) and
+/// its impulse run at [`TOL_FINE`] (panics, naming the seed, if either stops).
+fn pair(seed: u64, held: Option<f64>) -> (Case, RunOutput, RunOutput) {
     let case = draw(seed);
-    let mut tight = case.scene.clone();
-    tight.momentum.held_tolerance = HELD_TIGHT;
-    let mom = solvers::run(&tight, Method::Momentum, None)
+    let mut scene = case.scene.clone();
+    if let Some(h) = held {
+        scene.momentum.held_tolerance = h;
+    }
+    let mom = solvers::run(&scene, Method::Momentum, None)
         .unwrap_or_else(|e| panic!("seed {seed}: {e}\n{}", case.what));
     let imp = impulse_at(&case.scene, TOL_FINE)
         .unwrap_or_else(|e| panic!("seed {seed}: impulse: {e}\n{}", case.what));

@@ -148,6 +148,32 @@ fn solve_blocks(sys: &System, ainv: &[Vec<f64>], r: &mut DVector<f64>, tmp: &mut
     }
 }
 
+/// The equilibrium residual r = p − M a + f_int + (contact forces pushing the floors apart)
+/// at ground acceleration `ag` (m/s²), accelerations `a`, internal forces `f` (N) and contact
+/// forces `fc` (N) into `res`; returns the force scale of its terms (at least 1 N), against
+/// which Newton's tolerance is set.
+fn residual(
+    sys: &System,
+    ag: f64,
+    a: &[f64],
+    f: &[f64],
+    fc: &[f64],
+    res: &mut DVector<f64>,
+) -> f64 {
+    let mut scale: f64 = 1.0;
+    for i in 0..sys.n {
+        let p = -sys.mass[i] * ag;
+        let ma = sys.mass[i] * a[i];
+        res[i] = p - ma + f[i];
+        scale = scale.max(p.abs()).max(ma.abs()).max(f[i].abs());
+    }
+    for (c, &fc) in sys.contacts.iter().zip(fc) {
+        c.push_apart(res.as_mut_slice(), fc);
+        scale = scale.max(fc.abs());
+    }
+    scale
+}
+
 /// The law on a frozen state: the smooth branch while `on` (F may be negative: the
 /// active-set check then opens the contact), zero otherwise. (F, ∂F/∂δ, ∂F/∂δ̇).
 fn frozen(c: &super::ContactDof, on: bool, d: f64, dd: f64, vc: f64) -> (f64, f64, f64) {
@@ -467,21 +493,13 @@ impl<'a> NewmarkStepper<'a> {
                         }
                     }
                 }
-                let mut scale: f64 = 1.0;
-                for i in 0..n {
-                    let p = -sys.mass[i] * ag1;
-                    let ma = sys.mass[i] * a_new[i];
-                    res[i] = p - ma + f[i];
-                    scale = scale.max(p.abs()).max(ma.abs()).max(f[i].abs());
-                }
                 for (ci, c) in sys.contacts.iter().enumerate() {
                     let (d, dd) = kin(u_new, v_new, ci);
                     let (fc, kd, kv) = frozen(c, on[ci], d, dd, vc_trial[ci]);
                     f_new[ci] = fc;
                     alpha[ci] = kd + a1 * kv;
-                    c.push_apart(res.as_mut_slice(), fc);
-                    scale = scale.max(fc.abs());
                 }
+                let scale = residual(sys, ag1, a_new, f, f_new, res);
                 let rnorm = res.amax();
                 last_res = rnorm;
                 if !rnorm.is_finite() {
@@ -542,12 +560,7 @@ impl<'a> NewmarkStepper<'a> {
                     // The residual of the accepted state (`res` holds the update), for the
                     // residual work of the energy audit.
                     sys.internal(stories, u_new, v_new, f);
-                    for i in 0..n {
-                        res[i] = -sys.mass[i] * ag1 - sys.mass[i] * a_new[i] + f[i];
-                    }
-                    for (ci, c) in sys.contacts.iter().enumerate() {
-                        c.push_apart(res.as_mut_slice(), f_new[ci]);
-                    }
+                    residual(sys, ag1, a_new, f, f_new, res);
                     converged = true;
                     break;
                 }
