@@ -5,13 +5,14 @@
 #   make yielding-strong  the yielding study of a stronger pair (results/yielding-strong)
 #   make opensees  the cross-checks against OpenSees (installs OpenSeesPy in target/; not in CI)
 #   make bench-table  the README's speed table from BENCH_RUNS (6) criterion runs (not in CI)
+#   make doc       the API documentation, warnings as errors (CI runs it after make clippy)
 # Nothing else is needed on a fresh machine than a Rust toolchain (cargo): plots use a font
 # committed in data/fonts, so no system font or fontconfig package is required.
 
 CARGO ?= cargo
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 
-.PHONY: all build test studies robustness yielding-strong opensees bench bench-table fmt clippy clean
+.PHONY: all build test studies robustness yielding-strong opensees bench bench-table fmt clippy doc clean
 
 all: build
 
@@ -82,6 +83,13 @@ fmt:
 # as its source and stop (three times of four; deleting that file mends it).
 clippy:
 	$(CARGO) clippy --release --workspace --all-targets --target-dir target/clippy -- -D warnings
+
+# The API documentation (target/doc/solvers/index.html) with warnings as errors (CI runs it):
+# a doc link to an item that was renamed or never existed fails, as do math indices such as
+# φ[i] that rustdoc would take for links (write φ\[i\]). In clippy's target folder (the
+# same dependencies, checked once).
+doc:
+	RUSTDOCFLAGS="-D warnings" $(CARGO) doc --workspace --no-deps --target-dir target/clippy
 
 clean:
 	$(CARGO) clean

@@ -1,4 +1,4 @@
-//! # solvers — the two ways of modelling pounding, side by side
+//! # solvers — three ways of modelling pounding, side by side
 //!
 //! - [`momentum`]: the paper's method (Conoscente, Hamburger & Johnson). Each building in its
 //!   own mass-normalised modal coordinates, integrated exactly between events for
@@ -7,10 +7,14 @@
 //! - [`gap`]: the practice. Physical coordinates, a compression-only contact element
 //!   (linear, Kelvin–Voigt or Hertz-damp law), integrated by an adaptive embedded
 //!   Runge–Kutta pair with event location, or by fixed-step Newmark with Newton iterations.
+//! - [`impulse`]: the paper's impact law on the physical floor coordinates, integrated
+//!   between events by the gap element's adaptive pair with event location. It needs no
+//!   modal superposition, so it runs the yielding stories that [`momentum`] refuses.
 //!
-//! Both read a [`structure::Scene`], use the same M, K and classical C, and return the same
-//! [`RunOutput`] (serialised as the JSON documented in the README), so any difference
-//! between their answers comes from the contact treatment alone.
+//! All three read a [`structure::Scene`], use the same M, K and classical C, and return the
+//! same [`RunOutput`] (serialised as the JSON of `pound run --out`, its keys and units in
+//! docs/cli.md), so any difference between their answers comes from the contact treatment
+//! alone.
 
 pub mod closure;
 pub mod gap;

@@ -1,4 +1,4 @@
-//! The result of one analysis, common to both methods (the `pound run --out` JSON).
+//! The result of one analysis, common to the three methods (the `pound run --out` JSON).
 
 use serde::Serialize;
 
@@ -76,7 +76,7 @@ pub struct Impact {
     pub max_penetration: Option<f64>,
 }
 
-/// A phase in which two floors move together (momentum method with c_r < 1).
+/// A phase in which two floors move together (momentum and impulse methods, c_r < 1).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct PersistentContact {
     pub contact: usize,

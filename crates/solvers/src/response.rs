@@ -1,4 +1,4 @@
-//! Peak-response tracking and history sampling, shared by both solvers.
+//! Peak-response tracking and history sampling, shared by the three solvers.
 
 use structure::Scene;
 

@@ -3,8 +3,8 @@
 //! - [`grid_steps`]: how many steps of at most `dt` cover a duration, robust to the
 //!   round-off of decimal inputs (0.14 s / 0.01 s is 14 steps, not 15).
 //! - [`ImpactRateGuard`]: the impact-rate guard (`analysis.max_impact_rate`): a run stops
-//!   with [`SolverError::EventStorm`] when more than `max(2, ⌈rate · W⌉)` impacts (momentum)
-//!   or contact closures (gap element) fall inside any sliding window of
+//!   with [`SolverError::EventStorm`] when more than `max(2, ⌈rate · W⌉)` impacts (momentum
+//!   and impulse methods) or contact closures (gap element) fall inside any sliding window of
 //!   `W =` [`STORM_WINDOW`] s of simulated time, counted over all contacts.
 
 use std::collections::VecDeque;

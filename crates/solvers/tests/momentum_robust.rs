@@ -260,3 +260,40 @@ fn aligned_pair_with_chattering_and_held_neighbours_runs_to_the_end() {
     assert_sound(&out);
     assert!(!out.persistent_contacts.is_empty());
 }
+
+/// A run too short to gather energy (1e-12 … 1e-7 s of the paper scene, one partial step):
+/// its energies (1e-20 … 1e-9 J) are far below the round-off of the closed form's terms,
+/// about ε times the static energy of the largest ground load (`Problem::static_energy`),
+/// which the audit now includes in its scale; it stopped the 1e-9 s run as "not
+/// trustworthy" before. The balance error stays within a few ε of that scale (measured
+/// 1–2 ε on a smaller pair).
+#[test]
+fn runs_too_short_to_gather_energy_close_their_audit_to_round_off() {
+    for d in ["1e-12", "1e-9", "1e-7", "1e-5"] {
+        let s = paper(&[&format!("analysis.duration={d}")]);
+        let scale = Problem::new(&s).unwrap().static_energy;
+        let out = solve(&s, None).unwrap_or_else(|e| panic!("{d} s: {e}"));
+        let e = &out.energy;
+        assert!(
+            scale > 0.0 && e.input.abs() < 1e-6 * scale,
+            "{d} s: {e:?}, {scale:e}"
+        );
+        assert!(
+            e.balance_error.abs() <= 16.0 * f64::EPSILON * scale,
+            "{d} s: {e:?}, static energy {scale:e} J"
+        );
+    }
+}
+
+/// A state whose squares overflow (an initial velocity of 1e200 m/s) stops the run with a
+/// non-finite error that says so; it returned a result with infinite and NaN energies.
+#[test]
+fn energies_that_overflow_stop_the_run() {
+    let s = paper(&["buildings.0.initial_velocity=[0,0,0,0,0,0,0,0,0,0,0,0,0,0,1e200]"]);
+    match solve(&s, None) {
+        Err(SolverError::NonFinite { context, .. }) => {
+            assert!(context.contains("energies are not finite"), "{context}")
+        }
+        other => panic!("expected a non-finite error, got {other:?}"),
+    }
+}

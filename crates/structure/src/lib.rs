@@ -1,7 +1,7 @@
 //! # structure — models, matrices, modes and ground motions for `pound`
 //!
-//! Everything the two pounding solvers share lives here, so that differences between their
-//! answers come from the contact treatment alone:
+//! Everything the three pounding solvers (momentum, gap element, impulse) share lives here,
+//! so that differences between their answers come from the contact treatment alone:
 //!
 //! - [`model`]: the planar lumped-mass shear stick ([`model::Building`]), its mass, stiffness
 //!   and classical damping matrices, mass-normalised modes ([`model::Modes`]) and calibration

@@ -1,6 +1,6 @@
 //! Scene files: buildings, contacts, ground motion and solver options, in TOML.
 //!
-//! The format is documented in the README ("Scene files"). Loading happens in two stages:
+//! The format is documented in docs/scenes.md. Loading happens in two stages:
 //! the text is parsed into raw serde structs with `deny_unknown_fields` (so a misspelt key
 //! is an error that names it, with line and column), then validated into model types
 //! ([`Scene`]) with errors that name the file and the dotted key (`contacts[0].gap`).
@@ -1491,6 +1491,16 @@ fn validate(
                     format!("record file {} is a directory, not a file", path.display()),
                 ));
             }
+            if path.exists() && !path.is_file() {
+                return Err(invalid(
+                    key("file"),
+                    format!(
+                        "record file {} is not a regular file (a device, pipe or socket): \
+                         expected a record file",
+                        path.display()
+                    ),
+                ));
+            }
             if !path.is_file() {
                 let relative = if Path::new(&g.file).is_relative() {
                     format!(
@@ -1528,6 +1538,24 @@ fn validate(
                 Some(p) => rec.scaled_to_pga(p),
                 None => rec.scaled(factor),
             };
+            // A factor near the largest f64 overflows the record: refused here, not left to
+            // stop a solver with a non-finite state.
+            if let Some(i) = scaled.accel.iter().position(|a| !a.is_finite()) {
+                let (k, v) = match g.pga {
+                    Some(p) => ("pga", format!("{p:e} g")),
+                    None => ("scale", format!("{factor:e}")),
+                };
+                return Err(invalid(
+                    key(k),
+                    format!(
+                        "{v} scales sample {} of {} ({:e} m/s^2) beyond the range of floating \
+                         point (expected a factor that leaves every acceleration finite)",
+                        i + 1,
+                        path.display(),
+                        rec.accel[i]
+                    ),
+                ));
+            }
             (
                 Some(scaled),
                 Some(GroundMotionSource {

@@ -523,3 +523,76 @@ fn shorthand_values_are_named_as_written() {
         &["key `buildings[0].masses[1]`", "> 0"],
     );
 }
+
+// ---------------------------------------------------------------------------------------
+// Values beyond floating point: a record value that overflows in m/s², a scale factor that
+// overflows the record, a record path that is a device
+// ---------------------------------------------------------------------------------------
+
+/// 1e308 g is finite, 9.8e308 m/s² is not: each reader names the line (it loaded, and the
+/// run stopped at 2.56 s with a non-finite state, or a study's cases failed as "singular
+/// contact").
+#[test]
+fn a_record_value_that_overflows_in_si_names_the_line() {
+    let at2 = "PEER\nrecord\nACCELERATION TIME SERIES IN UNITS OF G\nNPTS=   4, DT=   .0100 SEC\n0.1 0.2\n1e308 0.1\n";
+    let e = GroundMotion::from_at2_str(at2, "big.AT2").expect_err("overflow");
+    let msg = e.to_string();
+    assert!(
+        matches!(e, RecordError::Overflow { line: 6, .. })
+            && msg.contains("big.AT2 line 6: 1e308 g")
+            && msg.contains("m/s^2"),
+        "{msg}"
+    );
+    let e = GroundMotion::from_one_column_str("0.1\n0.2\n-1e308\n", "big.txt", 0.01, Units::G)
+        .expect_err("overflow");
+    assert!(matches!(e, RecordError::Overflow { line: 3, .. }), "{e}");
+    let e = GroundMotion::from_two_column_str("0 0.1\n0.01 1e308\n", "big.txt", Units::G)
+        .expect_err("overflow");
+    assert!(matches!(e, RecordError::Overflow { line: 2, .. }), "{e}");
+    // In m/s² the same number is finite and loads.
+    let g =
+        GroundMotion::from_one_column_str("0.1\n1e308\n", "ok.txt", 0.01, Units::MetersPerSecond2)
+            .unwrap();
+    assert_eq!(g.accel[1], 1e308);
+}
+
+/// A `scale` or `pga` that takes the record beyond floating point is refused with its key
+/// and the sample (it stopped the solver with a non-finite state at 0.32 s).
+#[test]
+fn a_scale_that_overflows_the_record_names_the_key() {
+    let text = one("masses = [1e6]\nstory_stiffness = [1e9]")
+        + "[ground_motion]\nfile = \"pulse.txt\"\nformat = \"one-column\"\ndt = 0.01\nunits = \"g\"\n";
+    err_has(
+        load(&format!("{text}scale = 1e308\n"), &[]),
+        &[
+            "key `ground_motion.scale`",
+            "1e308 scales sample 2 of",
+            "pulse.txt",
+            "beyond the range of floating point",
+        ],
+    );
+    err_has(
+        load(&format!("{text}pga = 1e308\n"), &[]),
+        &[
+            "key `ground_motion.pga`",
+            "1e308 g scales sample",
+            "beyond the range of floating point",
+        ],
+    );
+    assert!(load(&format!("{text}scale = 1e300\n"), &[]).is_ok());
+}
+
+/// A record path that is a device is said to be one (it was said not to exist).
+#[cfg(unix)]
+#[test]
+fn a_record_that_is_a_device_is_named_so() {
+    let text =
+        one("masses = [1e6]\nstory_stiffness = [1e9]") + "[ground_motion]\nfile = \"/dev/null\"\n";
+    err_has(
+        load(&text, &[]),
+        &[
+            "key `ground_motion.file`",
+            "/dev/null is not a regular file",
+        ],
+    );
+}

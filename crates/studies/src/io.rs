@@ -1,5 +1,6 @@
 //! Output files that are never partial: everything is written to a temporary file in the
-//! destination folder and renamed into place.
+//! destination folder and renamed into place (a device or pipe such as `/dev/null` is
+//! written through instead; a symbolic link has its target replaced, the link kept).
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -13,6 +14,9 @@ pub enum OutputError {
     /// The OS error is part of the message, not a chained source (printed once).
     #[error("cannot write {path}: {error}")]
     Io { path: String, error: std::io::Error },
+    /// The destination is a folder.
+    #[error("cannot write {path}: it is a folder (expected a file name)")]
+    IsAFolder { path: String },
     /// A component of the destination's folder is a file.
     #[error("cannot write {path}: {file} is a file, not a folder")]
     NotAFolder { path: String, file: String },
@@ -36,28 +40,81 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
     write_all_atomic(&[(path, bytes)])
 }
 
+/// Where and how a destination is written ([`write_all_atomic`]).
+enum Destination {
+    /// A regular file, or none yet: a temporary file beside it, renamed into place.
+    Replace(PathBuf),
+    /// A device, pipe or socket (`/dev/null`, a FIFO): written through, as a shell's `>`
+    /// would; renaming a file over it would replace the device.
+    Through(PathBuf),
+}
+
+/// The destination of `path`: a symbolic link is followed (its target is written, the link
+/// kept), a folder is refused, a device or pipe is written through.
+fn destination(path: &Path) -> Result<Destination, OutputError> {
+    let io_err = |error| OutputError::Io {
+        path: path.display().to_string(),
+        error,
+    };
+    let mut real = path.to_path_buf();
+    // Follow links one by one (a dangling link's target is created), at most 40 deep, as
+    // the kernel does.
+    for _ in 0..40 {
+        match std::fs::symlink_metadata(&real) {
+            Ok(m) if m.file_type().is_symlink() => {
+                let target = std::fs::read_link(&real).map_err(io_err)?;
+                real = match real.parent() {
+                    Some(dir) => dir.join(target),
+                    None => target,
+                };
+            }
+            Ok(m) if m.is_dir() => {
+                return Err(OutputError::IsAFolder {
+                    path: path.display().to_string(),
+                })
+            }
+            Ok(m) if !m.is_file() => return Ok(Destination::Through(real)),
+            _ => return Ok(Destination::Replace(real)),
+        }
+    }
+    Err(io_err(std::io::Error::other(
+        "too many levels of symbolic links",
+    )))
+}
+
 /// Writes several files all or nothing: every file goes to a temporary file in its folder
 /// first; only when all are written are they renamed into place. If any cannot be written,
 /// the temporary files are removed and every destination is left as it was (an existing
-/// file is neither replaced nor deleted).
+/// file is neither replaced nor deleted). A destination that is a symbolic link has its
+/// target written (the link stays); one that is a folder is refused before anything is
+/// written; a device or pipe (`/dev/null`, a FIFO) is written through after the temporary
+/// files and before any rename, so that a failing device (`/dev/full`) leaves the other
+/// destinations as they were.
 pub fn write_all_atomic(files: &[(&Path, &[u8])]) -> Result<(), OutputError> {
-    let mut staged: Vec<(PathBuf, &Path)> = Vec::new();
-    let cleanup = |staged: &[(PathBuf, &Path)]| {
-        for (tmp, _) in staged {
+    let dests = files
+        .iter()
+        .map(|(p, _)| destination(p))
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut staged: Vec<(PathBuf, &Path, &Path)> = Vec::new();
+    let cleanup = |staged: &[(PathBuf, &Path, &Path)]| {
+        for (tmp, _, _) in staged {
             let _ = std::fs::remove_file(tmp);
         }
     };
-    for (k, (path, bytes)) in files.iter().enumerate() {
+    for (k, ((path, bytes), dest)) in files.iter().zip(&dests).enumerate() {
+        let Destination::Replace(real) = dest else {
+            continue;
+        };
         let err = |error| OutputError::Io {
             path: path.display().to_string(),
             error,
         };
-        let dir = match path.parent() {
+        let dir = match real.parent() {
             Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
             _ => PathBuf::from("."),
         };
-        let ro = std::fs::metadata(path).is_ok_and(|m| m.permissions().readonly());
-        let name = path
+        let ro = std::fs::metadata(real).is_ok_and(|m| m.permissions().readonly());
+        let name = real
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default();
@@ -86,10 +143,27 @@ pub fn write_all_atomic(files: &[(&Path, &[u8])]) -> Result<(), OutputError> {
                 None => err(e),
             });
         }
-        staged.push((tmp, path));
+        staged.push((tmp, real.as_path(), path));
     }
-    for (i, (tmp, path)) in staged.iter().enumerate() {
-        if let Err(e) = std::fs::rename(tmp, path) {
+    for ((path, bytes), dest) in files.iter().zip(&dests) {
+        let Destination::Through(real) = dest else {
+            continue;
+        };
+        let result = (|| {
+            let mut f = std::fs::OpenOptions::new().write(true).open(real)?;
+            f.write_all(bytes)?;
+            f.flush()
+        })();
+        if let Err(error) = result {
+            cleanup(&staged);
+            return Err(OutputError::Io {
+                path: path.display().to_string(),
+                error,
+            });
+        }
+    }
+    for (i, (tmp, real, path)) in staged.iter().enumerate() {
+        if let Err(e) = std::fs::rename(tmp, real) {
             cleanup(&staged[i..]);
             return Err(OutputError::Io {
                 path: path.display().to_string(),

@@ -1,4 +1,5 @@
-//! `pound`: seismic pounding of adjacent buildings, two ways.
+//! `pound`: seismic pounding of adjacent buildings, by the paper's momentum method, the gap
+//! element and the impulse method.
 //!
 //! Exit codes: 0 success; 2 bad input (scene, record, arguments); 3 a solver could not go on;
 //! 4 a study sweep finished but some of its cases failed (each study's `summary.md` names
@@ -139,9 +140,9 @@ enum ExportTarget {
 
 #[derive(Subcommand)]
 enum StudiesCommand {
-    /// Run studies and write their tables and figures under OUT/<study>/.
+    /// Run studies and write their tables and figures under `OUT/<study>/`.
     ///
-    /// Finished cases are cached in OUT/<study>/cases/<id>.json and skipped on a rerun.
+    /// Finished cases are cached in `OUT/<study>/cases/<id>.json` and skipped on a rerun.
     /// With --shard i/n (default: SLURM_ARRAY_TASK_ID/SLURM_ARRAY_TASK_COUNT when set) only
     /// every n-th case runs and only case files are written; `pound studies merge` then
     /// checks coverage and writes the tables and figures.
@@ -155,7 +156,7 @@ enum StudiesCommand {
         /// Output folder.
         #[arg(long, default_value = "results")]
         out: PathBuf,
-        /// Folder holding the study definitions (<name>.toml) and the scenes they name.
+        /// Folder holding the study definitions (`<name>.toml`) and the scenes they name.
         #[arg(long, default_value = "studies")]
         studies_dir: PathBuf,
         /// Run the record-based studies (stiffness, modes, restitution, gap, modelform,
@@ -191,7 +192,7 @@ enum StudiesCommand {
     /// Merge shard outputs (output folders of `studies run --shard`), check that every case
     /// is present (listing missing ids otherwise) and write the tables and figures.
     Merge {
-        /// Output folders of the shards (each holding <study>/manifest.json and cases/).
+        /// Output folders of the shards (each holding `<study>/manifest.json` and cases/).
         #[arg(required = true)]
         dirs: Vec<PathBuf>,
         /// Where to write the merged results (default: the first folder).
@@ -374,7 +375,12 @@ fn implausible_pga(g: &GroundMotion, what: &str) {
     let pga = g.pga() / structure::G;
     if pga > PLAUSIBLE_PGA_G {
         eprintln!(
-            "warning: the ground motion's PGA is {pga:.3} g, above {PLAUSIBLE_PGA_G} g, more than any recorded earthquake: check the record's units ({what})"
+            "warning: the ground motion's PGA is {} g, above {PLAUSIBLE_PGA_G} g, more than any recorded earthquake: check the record's units ({what})",
+            if pga < 1e6 {
+                format!("{pga:.3}")
+            } else {
+                format!("{pga:.3e}")
+            }
         );
     }
 }
@@ -771,6 +777,12 @@ fn studies_command(command: StudiesCommand) -> Result<()> {
                     return Err(input(format!(
                         "--records: {} is a folder; give the record files (e.g. {}/*.AT2)",
                         r.display(),
+                        r.display()
+                    )));
+                }
+                if r.exists() && !r.is_file() {
+                    return Err(input(format!(
+                        "--records: {} is not a regular file (a device, pipe or socket): expected a record file",
                         r.display()
                     )));
                 }

@@ -139,6 +139,14 @@ fn failed_out_leaves_an_existing_history_as_it_was() {
     let hist = d.write("history.csv", "earlier run\n");
     let blocker = d.write("afile", "");
     let out = blocker.join("run.json"); // its folder is a file: cannot be written
+    let err = failed_output(&d, &hist, &out);
+    assert!(err.contains("run.json"), "{err}");
+    assert_eq!(std::fs::read_to_string(&hist).unwrap(), "earlier run\n");
+}
+
+/// A 2 s momentum run of the paper scene with `--history hist --out out` that must fail to
+/// write (exit 1) and leave no temporary file in `d`: its stderr.
+fn failed_output(d: &TempDir, hist: &std::path::Path, out: &std::path::Path) -> String {
     let o = run_momentum(
         &scene(),
         "2",
@@ -149,16 +157,108 @@ fn failed_out_leaves_an_existing_history_as_it_was() {
             out.to_str().unwrap(),
         ],
     );
-    let err = String::from_utf8_lossy(&o.stderr);
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
     assert_eq!(o.status.code(), Some(1), "{err}");
-    assert!(err.contains("run.json"), "{err}");
-    assert_eq!(std::fs::read_to_string(&hist).unwrap(), "earlier run\n");
-    let left: Vec<_> = std::fs::read_dir(hist.parent().unwrap())
+    let left: Vec<_> = std::fs::read_dir(&d.0)
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .filter(|n| n.contains(".tmp-"))
         .collect();
     assert!(left.is_empty(), "temporary files left: {left:?}");
+    err
+}
+
+/// `--out` naming a folder is refused before anything is written: the history that was
+/// there before stays as it was (the rename of the history used to come first and replace
+/// it, then the JSON's rename failed).
+#[test]
+fn out_naming_a_folder_writes_nothing() {
+    let d = TempDir::new("outfolder");
+    let hist = d.write("history.csv", "earlier run\n");
+    let folder = d.path("results");
+    std::fs::create_dir(&folder).unwrap();
+    let err = failed_output(&d, &hist, &folder);
+    assert!(
+        err.contains("is a folder") && err.contains("results"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read_to_string(&hist).unwrap(), "earlier run\n");
+    assert_eq!(std::fs::read_dir(&folder).unwrap().count(), 0);
+}
+
+/// An output that is a symbolic link has its target written and stays a link (a dangling
+/// link's target is created); a named pipe is written through and stays a pipe (renaming a
+/// file over it replaced it, as it replaced /dev/null for a root user).
+#[cfg(unix)]
+#[test]
+fn outputs_follow_links_and_write_through_pipes() {
+    use std::os::unix::fs::FileTypeExt;
+    let d = TempDir::new("outlinks");
+    let target = d.write("target.json", "old\n");
+    let link = d.path("link.json");
+    std::os::unix::fs::symlink("target.json", &link).unwrap();
+    let dangling = d.path("dangling.json");
+    std::os::unix::fs::symlink("created.json", &dangling).unwrap();
+    for l in [&link, &dangling] {
+        let o = run_momentum(&scene(), "1", &["--out", l.to_str().unwrap()]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        assert!(std::fs::symlink_metadata(l)
+            .unwrap()
+            .file_type()
+            .is_symlink());
+    }
+    for f in [&target, &d.path("created.json")] {
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(f).unwrap()).unwrap();
+        assert!(v["buildings"].is_array(), "{}", f.display());
+    }
+    let fifo = d.path("pipe.json");
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+    if !made.is_ok_and(|s| s.success()) {
+        eprintln!("mkfifo unavailable: the pipe part is skipped");
+        return;
+    }
+    let reader = {
+        let fifo = fifo.clone();
+        std::thread::spawn(move || std::fs::read_to_string(fifo).unwrap())
+    };
+    let o = run_momentum(&scene(), "1", &["--out", fifo.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = reader.join().unwrap();
+    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    assert!(v["buildings"].is_array());
+    assert!(std::fs::symlink_metadata(&fifo)
+        .unwrap()
+        .file_type()
+        .is_fifo());
+}
+
+/// A device that fails the write (/dev/full: no space) fails the run's output with exit 1
+/// and the reason, and stays the device; the other output is not written.
+#[cfg(unix)]
+#[test]
+fn a_failing_device_fails_the_output_and_stays_a_device() {
+    use std::os::unix::fs::FileTypeExt;
+    let full = std::path::Path::new("/dev/full");
+    if !std::fs::metadata(full).is_ok_and(|m| m.file_type().is_char_device()) {
+        eprintln!("no /dev/full: skipped");
+        return;
+    }
+    let d = TempDir::new("devfull");
+    let hist = d.path("history.csv");
+    let o = run_momentum(
+        &scene(),
+        "1",
+        &["--history", hist.to_str().unwrap(), "--out", "/dev/full"],
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("/dev/full") && err.contains("space"), "{err}");
+    assert!(std::fs::metadata(full)
+        .unwrap()
+        .file_type()
+        .is_char_device());
+    assert!(!hist.exists(), "history written beside a failed output");
 }
 
 /// The linear gap element is an elastic spring: a restitution below 1 (or `tension`) that it

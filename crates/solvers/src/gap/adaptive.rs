@@ -41,11 +41,11 @@
 //! Cost (issue 10: the paper scene takes one step per record interval, so the time goes
 //! into the work per step, about six right-hand sides and the dense output's uses). Every
 //! shortcut below gives bit-identical results (the same operations in the same order):
-//! - the right-hand side ([`Rhs`]) works on panels of 4 floors in vector registers (AVX2
+//! - the right-hand side (`Rhs`) works on panels of 4 floors in vector registers (AVX2
 //!   where available, through `pulp`; no fused multiply-add), C v column by column;
 //! - the dense peaks look first only at the sign of each rate at both ends, and bound the
 //!   Hermite extremum before solving for it; the bisections that locate an extremum
-//!   ([`bisect`]) evaluate three levels of midpoints at once;
+//!   (`bisect`) evaluate three levels of midpoints at once;
 //! - without a history, the instants before the end update the peaks only.
 
 use crate::closure::Conv;

@@ -390,7 +390,7 @@ impl Dopri5 {
         }
     }
 
-    /// Commits the tried step: y ← y1, k[0] ← k[6] (FSAL).
+    /// Commits the tried step: y ← y1, k\[0\] ← k\[6\] (FSAL).
     pub fn accept_full(&mut self, y: &mut [f64]) {
         y.copy_from_slice(&self.y1);
         let [k1, .., k7] = &mut self.k;

@@ -67,13 +67,15 @@
 //! **How it differs from the momentum method with all modes.** Free flight and impacts are
 //! the same equations: the Delassus matrix G M⁻¹ Gᵀ equals the modal Σ g gᵀ (Φ Φᵀ = M⁻¹),
 //! so impact times, velocities and peaks agree to the integration tolerance. In a
-//! persistent-contact phase the momentum method holds each segment with a *constant* force
-//! chosen so that δ = 0 at the segment end (a piecewise-constant λ on the record step,
-//! [`crate::momentum::persistent`]) and locates the release on that piecewise trajectory;
-//! here λ(t) is the exact instantaneous constraint force. The two held motions differ by
-//! the momentum method's discretisation of λ (second order in its step), so on scenes with
-//! persistent contact the answers agree to that order, not to the tolerance. The momentum
-//! method also judges the sign of the holding force at its segment ends only: a tensile
+//! persistent-contact phase the momentum method holds each segment with a force *linear* in
+//! time, from the instantaneous force at the segment start to the force that closes the held
+//! gaps at its end, on segments whose lengths adapt to `momentum.held_tolerance`
+//! ([`crate::momentum::persistent`]), and locates the release on that trajectory; here λ(t)
+//! is the exact instantaneous constraint force. The two held motions differ by the momentum
+//! method's discretisation of λ, which falls in proportion to its held tolerance
+//! (`tests/impulse.rs`), so on scenes with persistent contact the answers agree to an
+//! accuracy set by that tolerance, not to the integration tolerance. The momentum method
+//! also judges the sign of the holding force at its segment ends only: a tensile
 //! excursion shorter than a segment (a brief release followed by a slow re-impact) is
 //! missed there and found here, where λ is sampled four times per adaptive step; with its
 //! step refined the momentum method finds it too (aligned paper scene, c_r = 0).

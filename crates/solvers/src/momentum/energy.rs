@@ -7,11 +7,15 @@
 //!   [`super::modal::Arc::damping_integral`] for partial segments).
 //!
 //! Impacts change the kinetic energy by exactly ½Σ(q̇⁺² − q̇⁻²) (for `consistent`,
-//! ½(1−e²)v²/W per impact); that loss is `contact`. Persistent-contact forces are constant
-//! per segment and do the work λ·Δδ (zero to round-off, the contact is workless); it is
-//! added to `contact` too, as is the potential energy that closing a held gap after a cut
-//! segment changes (`Stepper::close_held_gaps`). balance_error = initial + input − damping − contact − final
-//! therefore measures the integration itself.
+//! ½(1−e²)v²/W per impact); that loss is `contact`. Persistent-contact forces are linear
+//! in time over a held segment ([`super::persistent`]) and do a little work over a segment
+//! whose ends have the same gaps (−λ̇∫δ dt, from [`super::modal::Arc::ramp_work`]); it is
+//! added to `contact` too, as are the held-segment ends' velocity projections and the
+//! potential energy that closing a held gap after a cut segment changes
+//! (`Stepper::close_held_gaps`). balance_error = initial + input − damping − contact − final
+//! therefore measures the integration itself; the run stops when it exceeds 1e-6 of the
+//! energy scale, which includes the static energy of the largest ground load
+//! ([`super::problem::Problem::static_energy`]: the closed form's round-off is about ε of it).
 
 use crate::EnergyAudit;
 

@@ -1,12 +1,12 @@
 //! Contact geometry in modal coordinates and the impact impulses (paper eqs 19–24).
 //!
 //! Contact c joins floor i of building L to floor j of building R, or to a rigid wall that
-//! moves with the ground (then g_c = (φ_L[i]) alone and v_c is the floor's own velocity
+//! moves with the ground (then g_c = (φ_L\[i\]) alone and v_c is the floor's own velocity
 //! relative to the ground). With the dense modal row
-//! g_c = (φ_L[i] on L's modes, −φ_R[j] on R's modes), the gap function and the relative
+//! g_c = (φ_L\[i\] on L's modes, −φ_R\[j\] on R's modes), the gap function and the relative
 //! (approach) velocity are δ_c = g_c·q − gap and v_c = g_c·q̇. An impulse pair P_c ≥ 0
 //! pushes the floors apart: Δq̇ = −g_c P_c, so Δv = −W P with the Delassus matrix
-//! W_ab = g_a·g_b (W_cc = Σ_kept φ_L[i]² + Σ_kept φ_R[j]²).
+//! W_ab = g_a·g_b (W_cc = Σ_kept φ_L\[i\]² + Σ_kept φ_R\[j\]²).
 //!
 //! - `consistent`: W_AA P_A = (1 + e) v_A on the active set A (a small linear
 //!   complementarity problem: solve, drop the most negative impulse, repeat). Gives

@@ -30,7 +30,8 @@
 //! **Structure**: [`problem`] (the data built from a scene), [`stepper`] (the state and
 //! [`Stepper::advance`], one segment with a typed [`Step`]), [`observe`] (peaks, overlaps,
 //! history), [`impact`] (impact resolution), [`persistent`] (held contacts); the driver
-//! loop is [`solve_with_diagnostics`] below.
+//! loop is the private `drive` below, called by [`solve_with_diagnostics`] (through it by
+//! [`solve`]) and [`solve_audited`].
 //!
 //! **Events** ([`events`]): contact c closes when δ_c = u_left − u_right − gap crosses 0
 //! upwards (δ̇ > 0). The instant is located with Brent's method (`roots`) on the closed

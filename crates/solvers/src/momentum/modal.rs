@@ -33,7 +33,7 @@ pub struct BuildingModes {
     pub range: Range<usize>,
     /// Number of floors.
     pub n_floors: usize,
-    /// Mode shapes, column-major: `phi[m * n_floors + i]` = φ_m[i] (m local mode index).
+    /// Mode shapes, column-major: `phi[m * n_floors + i]` = φ_m\[i\] (m local mode index).
     pub phi: Vec<f64>,
     /// Floor masses, kg.
     pub masses: Vec<f64>,
@@ -259,7 +259,7 @@ impl Modal {
         self.omega.is_empty()
     }
 
-    /// φ_n[dof] of building `b`, as a dense vector over all modes (zero elsewhere).
+    /// φ_n\[dof\] of building `b`, as a dense vector over all modes (zero elsewhere).
     pub fn floor_row(&self, b: usize, dof: usize) -> Vec<f64> {
         let bm = &self.buildings[b];
         let mut row = vec![0.0; self.len()];
@@ -996,7 +996,7 @@ impl Arc {
     }
 
     /// The transcendental part of an evaluation at s: [e^{−ζωs}, sin ω_d s, cos ω_d s]
-    /// ([`super::trig`]; the same bits as [`trig_many`] gives this arc).
+    /// ([`super::trig`]; the same bits as [`Arc::trig4`] and [`TrigMemo::fill`] give this arc).
     #[inline]
     pub fn trig(&self, s: f64) -> [f64; 3] {
         super::trig::exp_sin_cos1(-self.c * s, self.d * s)

@@ -1,7 +1,7 @@
 //! Continuous peaks between samples (issue 10): the momentum method knows every mode in
 //! closed form between events (a slow mode by its Taylor series,
 //! [`super::modal::SERIES_BELOW`]), so a peak of a response quantity y(t) = Σ_n c_n q_n(t) (a
-//! floor displacement, c_n = φ_n[i]; a story shear, c_n = k_j (φ_n[j] − φ_n[j−1])) that falls
+//! floor displacement, c_n = φ_n\[i\]; a story shear, c_n = k_j (φ_n\[j\] − φ_n\[j−1\])) that falls
 //! between two samples is found exactly rather than sampled.
 //!
 //! At each sample the solver knows y and ẏ (ẏ = Σ c_n q̇_n) at both ends of the interval just
@@ -16,8 +16,8 @@
 //! relative step of 1e-13, and its exact value replaces the peak if larger.
 //!
 //! The overlap audit ([`crate::overlap`]) uses the same machinery for the signed maxima of
-//! u_left[i] − u_right[j], whose coefficients c_n = φ_n[i] on the left building's modes and
-//! −φ_n[j] on the right building's span both buildings (`first` = 0, all modes).
+//! u_left\[i\] − u_right\[j\], whose coefficients c_n = φ_n\[i\] on the left building's modes and
+//! −φ_n\[j\] on the right building's span both buildings (`first` = 0, all modes).
 
 use super::modal::{Arc, Modal};
 
@@ -349,7 +349,7 @@ pub fn hermite_error_bound(modal: &Modal, first: usize, c: &[f64], amp: &[f64], 
     len.powi(4) / 384.0 * d4
 }
 
-/// The exact extremum of y = Σ_m c[m] q_{first+m} on the `arcs` (closed form or series), by Newton on
+/// The exact extremum of y = Σ_m c\[m\] q_{first+m} on the `arcs` (closed form or series), by Newton on
 /// ẏ = 0 from `s0`, kept in [0, `len`]. Returns y at the extremum.
 pub fn refine(modal: &Modal, first: usize, c: &[f64], arcs: &[Arc], len: f64, s0: f64) -> f64 {
     refine_at(modal, first, c, arcs, len, s0).1

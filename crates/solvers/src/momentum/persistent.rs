@@ -63,7 +63,7 @@ const HELD_SHORTENINGS: usize = 40;
 /// (ψ(τ), ψ'(τ)): displacement and velocity at τ of a mode (ω, ζ) under a load rising
 /// linearly from 0 to 1 over τ, from rest: x'' + 2ζω x' + ω² x = t/τ, x(0) = x'(0) = 0.
 ///
-/// For ωτ ≤ 0.5 by its Taylor series ([`ramp_series`]): the closed form's particular and
+/// For ωτ ≤ 0.5 by its Taylor series (`ramp_series`): the closed form's particular and
 /// homogeneous parts are each about 1/ω² while ψ ≈ τ²/6, so it loses every digit to
 /// cancellation when ωτ is small (as the constant load's closed form did on the very short
 /// segments Brent's method tries while locating a release: 0 for every mode, a singular

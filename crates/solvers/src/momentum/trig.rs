@@ -1,7 +1,9 @@
 //! The transcendental part of the closed form, e^p, sin q and cos q, four arguments at a
 //! time: every arc of a segment is evaluated at the same instant s, so the segment end
 //! state, the event location, the damping integral and the deferred peak refinement take
-//! [e^{−ζ_n ω_n s}, sin ω_dn s, cos ω_dn s] for all modes n together ([`exp_sin_cos`]).
+//! [e^{−ζ_n ω_n s}, sin ω_dn s, cos ω_dn s] for all modes n together
+//! ([`exp_sin_cos_slices`]; [`exp_sin_cos_with`] inside the caller's dispatch,
+//! [`exp_sin_cos1`] for one argument pair).
 //!
 //! The algorithms are fdlibm's (Sun Microsystems, 1993; the ones of musl and of the
 //! `libm` crate), written branch-free over four lanes so that the compiler vectorises

@@ -150,6 +150,14 @@ pub enum RecordError {
         line: usize,
         found: String,
     },
+    /// A value finite in the file's units that overflows in m/s².
+    #[error("{origin} line {line}: {found:e} {units} is beyond the range of floating point in m/s^2 (expected an acceleration whose value in m/s^2 is finite; check the record's units)")]
+    Overflow {
+        origin: String,
+        line: usize,
+        found: f64,
+        units: Units,
+    },
     /// `line` is `None` when the time step was given by the caller, not read from the file.
     #[error("{origin}{}: expected a time step DT > 0 (s), found {dt}", line_suffix(*.line))]
     BadDt {
@@ -383,6 +391,22 @@ fn parse_number(text: &str) -> Option<f64> {
     }
 }
 
+/// `v` (in `units`, read at `line`) in m/s², or [`RecordError::Overflow`] when that is not
+/// finite (1e308 g is finite, 9.8e308 m/s² is not).
+fn si(v: f64, units: Units, origin: &str, line: usize) -> Result<f64, RecordError> {
+    let a = v * units.to_si();
+    if a.is_finite() {
+        Ok(a)
+    } else {
+        Err(RecordError::Overflow {
+            origin: origin.to_string(),
+            line,
+            found: v,
+            units,
+        })
+    }
+}
+
 /// Parse a value token: a `Value` error if not a number, `NonFinite` if NaN/inf.
 fn value(tok: &Token<'_>, origin: &str, line: usize, expected: &str) -> Result<f64, RecordError> {
     match parse_number(tok.text) {
@@ -593,7 +617,7 @@ impl GroundMotion {
         for (ln, l) in lines {
             for tok in tokens(l, false) {
                 let v = value(&tok, origin, ln, &expected)?;
-                accel.push(v * units.to_si());
+                accel.push(si(v, units, origin, ln)?);
                 last_line = ln;
             }
         }
@@ -663,7 +687,7 @@ impl GroundMotion {
             let t = value(&toks[0], origin, ln, "a number (time in s)")?;
             let a = value(&toks[1], origin, ln, &expected_accel)?;
             times.push((t, ln));
-            accel.push(a * units.to_si());
+            accel.push(si(a, units, origin, ln)?);
         }
         if !any {
             return Err(RecordError::Empty {
@@ -764,7 +788,7 @@ impl GroundMotion {
             let l = raw.split('#').next().unwrap_or("");
             any |= !raw.trim().is_empty();
             for tok in tokens(l, true) {
-                accel.push(value(&tok, origin, ln, &expected)? * units.to_si());
+                accel.push(si(value(&tok, origin, ln, &expected)?, units, origin, ln)?);
                 last_line = ln;
             }
         }

@@ -7,7 +7,7 @@
 //!
 //! Derived quantities, all with mass-normalised φ_n:
 //! - participation factor Γ_n = φ_nᵀ M 1; effective modal mass Γ_n² (Σ_n Γ_n² = Σ m);
-//! - contact flexibility fraction r_N = m_c Σ_{n≤N} φ_n[c]² (r_all = 1, see numerics notes).
+//! - contact flexibility fraction r_N = m_c Σ_{n≤N} φ_n\[c\]² (r_all = 1, see numerics notes).
 
 use nalgebra::DMatrix;
 
@@ -131,7 +131,7 @@ impl Modes {
             .collect()
     }
 
-    /// Contact flexibility fraction r_N = m_c Σ_{n≤N} φ_n[c]² for N = 1 … n_modes, at the
+    /// Contact flexibility fraction r_N = m_c Σ_{n≤N} φ_n\[c\]² for N = 1 … n_modes, at the
     /// floor with 0-based index `dof`.
     pub fn contact_flexibility(&self, dof: usize) -> Vec<f64> {
         let mc = self.masses[dof];
@@ -144,7 +144,7 @@ impl Modes {
             .collect()
     }
 
-    /// Delassus value W = Σ_n φ_n[c]² of the held modes at floor `dof`, 1/kg.
+    /// Delassus value W = Σ_n φ_n\[c\]² of the held modes at floor `dof`, 1/kg.
     pub fn delassus(&self, dof: usize) -> f64 {
         (0..self.n_modes())
             .map(|n| self.phi[(dof, n)].powi(2))

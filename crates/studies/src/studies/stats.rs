@@ -1,5 +1,6 @@
 //! Record-to-record statistics shared by the record-based studies (`stiffness`, `modes`,
-//! `restitution`, `gap`).
+//! `restitution`, `gap`, `cost`, `modelform`, `yielding`) and the sweep's case rows
+//! (`crate::sweep`: a case's median approach speed).
 //!
 //! Responses to different ground motions are not samples of one distribution with a
 //! meaningful mean (a few strong pulses dominate a mean), so the studies report the median
