@@ -84,11 +84,13 @@ fmt:
 clippy:
 	$(CARGO) clippy --release --workspace --all-targets --target-dir target/clippy -- -D warnings
 
-# The API documentation (target/doc/solvers/index.html) with warnings as errors (CI runs it):
-# a doc link to an item that was renamed or never existed fails, as do math indices such as
-# φ[i] that rustdoc would take for links (write φ\[i\]). In clippy's target folder (the
-# same dependencies, checked once).
+# The API documentation (target/clippy/doc/solvers/index.html) with warnings as errors (CI
+# runs it): a doc link to an item that was renamed or never existed fails, as do math indices
+# such as φ[i] that rustdoc would take for links (write φ\[i\]). Twice: with the private
+# items (their docs' links checked too), then as published (no public doc linking a private
+# item). In clippy's target folder (the same dependencies, checked once).
 doc:
+	RUSTDOCFLAGS="-D warnings" $(CARGO) doc --workspace --no-deps --document-private-items --target-dir target/clippy
 	RUSTDOCFLAGS="-D warnings" $(CARGO) doc --workspace --no-deps --target-dir target/clippy
 
 clean:

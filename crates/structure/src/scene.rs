@@ -1485,36 +1485,34 @@ fn validate(
                 }
             }
             let path = base_dir.join(&g.file);
-            if path.is_dir() {
-                return Err(invalid(
-                    key("file"),
-                    format!("record file {} is a directory, not a file", path.display()),
-                ));
-            }
-            if path.exists() && !path.is_file() {
-                return Err(invalid(
-                    key("file"),
-                    format!(
-                        "record file {} is not a regular file (a device, pipe or socket): \
-                         expected a record file",
-                        path.display()
-                    ),
-                ));
-            }
-            if !path.is_file() {
-                let relative = if Path::new(&g.file).is_relative() {
-                    format!(
-                        " (`{}` is taken relative to the scene's folder, {})",
-                        g.file,
-                        folder_name(base_dir)
-                    )
-                } else {
-                    String::new()
-                };
-                return Err(invalid(
-                    key("file"),
-                    format!("record file {} does not exist{relative}", path.display()),
-                ));
+            // What the path names, links followed; an error other than "not found" (a
+            // folder that cannot be searched, a loop of links) is said as it is.
+            let shown = path.display();
+            let refused = match std::fs::metadata(&path) {
+                Ok(m) if m.is_dir() => {
+                    Some(format!("record file {shown} is a directory, not a file"))
+                }
+                Ok(m) if !m.is_file() => Some(format!(
+                    "record file {shown} is not a regular file (a device, pipe or socket): \
+                     expected a record file"
+                )),
+                Ok(_) => None,
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                    let relative = if Path::new(&g.file).is_relative() {
+                        format!(
+                            " (`{}` is taken relative to the scene's folder, {})",
+                            g.file,
+                            folder_name(base_dir)
+                        )
+                    } else {
+                        String::new()
+                    };
+                    Some(format!("record file {shown} does not exist{relative}"))
+                }
+                Err(e) => Some(format!("record file {shown} cannot be read: {e}")),
+            };
+            if let Some(msg) = refused {
+                return Err(invalid(key("file"), msg));
             }
             let rec = GroundMotion::load(&path, &format).map_err(|source| SceneError::Record {
                 file: origin.to_string(),

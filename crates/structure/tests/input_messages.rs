@@ -582,7 +582,8 @@ fn a_scale_that_overflows_the_record_names_the_key() {
     assert!(load(&format!("{text}scale = 1e300\n"), &[]).is_ok());
 }
 
-/// A record path that is a device is said to be one (it was said not to exist).
+/// A record path that is a device is said to be one (it was said not to exist), and one that
+/// cannot be resolved says why.
 #[cfg(unix)]
 #[test]
 fn a_record_that_is_a_device_is_named_so() {
@@ -595,4 +596,19 @@ fn a_record_that_is_a_device_is_named_so() {
             "/dev/null is not a regular file",
         ],
     );
+    // A loop of links is said as the system says it (it was "does not exist").
+    let dir = std::env::temp_dir().join(format!("pound-linkloop-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (a, b) = (dir.join("a.AT2"), dir.join("b.AT2"));
+    let _ = (std::fs::remove_file(&a), std::fs::remove_file(&b));
+    std::os::unix::fs::symlink(&b, &a).unwrap();
+    std::os::unix::fs::symlink(&a, &b).unwrap();
+    let text = one("masses = [1e6]\nstory_stiffness = [1e9]")
+        + &format!("[ground_motion]\nfile = \"{}\"\n", a.display());
+    let msg = err_has(
+        load(&text, &[]),
+        &["key `ground_motion.file`", "cannot be read"],
+    );
+    assert!(!msg.contains("does not exist"), "{msg}");
+    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -41,24 +41,36 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
 }
 
 /// Where and how a destination is written ([`write_all_atomic`]).
-enum Destination {
-    /// A regular file, or none yet: a temporary file beside it, renamed into place.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Destination {
+    /// A regular file, or none yet: a temporary file beside it, renamed into place. The path
+    /// is the file to replace: symbolic links followed, its folder resolved when it exists.
     Replace(PathBuf),
-    /// A device, pipe or socket (`/dev/null`, a FIFO): written through, as a shell's `>`
-    /// would; renaming a file over it would replace the device.
+    /// A device, pipe or socket (`/dev/null`, a FIFO, `/dev/stdout`): written through, as a
+    /// shell's `>` would; renaming a file over it would replace the device. The path as given.
     Through(PathBuf),
 }
 
-/// The destination of `path`: a symbolic link is followed (its target is written, the link
-/// kept), a folder is refused, a device or pipe is written through.
-fn destination(path: &Path) -> Result<Destination, OutputError> {
+/// The destination of `path`. What the path finally names is asked of the kernel, which
+/// follows every link (`/dev/stdout` → `/proc/self/fd/1` → a pipe, whose link text is not a
+/// path): a folder is refused, a device or pipe written through. A regular file or a new one
+/// is replaced where its links lead, link by link (a dangling link's target is created, the
+/// link kept), at most 40 deep as the kernel does.
+pub fn destination(path: &Path) -> Result<Destination, OutputError> {
     let io_err = |error| OutputError::Io {
         path: path.display().to_string(),
         error,
     };
+    match std::fs::metadata(path) {
+        Ok(m) if m.is_dir() => {
+            return Err(OutputError::IsAFolder {
+                path: path.display().to_string(),
+            })
+        }
+        Ok(m) if !m.is_file() => return Ok(Destination::Through(path.to_path_buf())),
+        _ => {}
+    }
     let mut real = path.to_path_buf();
-    // Follow links one by one (a dangling link's target is created), at most 40 deep, as
-    // the kernel does.
     for _ in 0..40 {
         match std::fs::symlink_metadata(&real) {
             Ok(m) if m.file_type().is_symlink() => {
@@ -68,13 +80,18 @@ fn destination(path: &Path) -> Result<Destination, OutputError> {
                     None => target,
                 };
             }
-            Ok(m) if m.is_dir() => {
-                return Err(OutputError::IsAFolder {
-                    path: path.display().to_string(),
-                })
+            _ => {
+                // The folder resolved (links, `..`) when it exists, so that two paths to one
+                // file compare equal; the file name as it is (the file need not exist).
+                let dir = match real.parent() {
+                    Some(d) if !d.as_os_str().is_empty() => d,
+                    _ => Path::new("."),
+                };
+                if let (Ok(d), Some(n)) = (std::fs::canonicalize(dir), real.file_name()) {
+                    real = d.join(n);
+                }
+                return Ok(Destination::Replace(real));
             }
-            Ok(m) if !m.is_file() => return Ok(Destination::Through(real)),
-            _ => return Ok(Destination::Replace(real)),
         }
     }
     Err(io_err(std::io::Error::other(
@@ -82,19 +99,45 @@ fn destination(path: &Path) -> Result<Destination, OutputError> {
     )))
 }
 
+/// Whether two output paths would write the same file: the same file to replace once links
+/// and folders are resolved (`--out link.json --history target.json`), or the same path. Two
+/// outputs to one device (`/dev/null`) are not: each is written through in turn.
+pub fn same_destination(a: &Path, b: &Path) -> bool {
+    match (destination(a), destination(b)) {
+        (Ok(Destination::Replace(x)), Ok(Destination::Replace(y))) => x == y,
+        (Ok(Destination::Through(_)), Ok(Destination::Through(_))) => false,
+        _ => a == b,
+    }
+}
+
 /// Writes several files all or nothing: every file goes to a temporary file in its folder
 /// first; only when all are written are they renamed into place. If any cannot be written,
 /// the temporary files are removed and every destination is left as it was (an existing
 /// file is neither replaced nor deleted). A destination that is a symbolic link has its
 /// target written (the link stays); one that is a folder is refused before anything is
-/// written; a device or pipe (`/dev/null`, a FIFO) is written through after the temporary
-/// files and before any rename, so that a failing device (`/dev/full`) leaves the other
-/// destinations as they were.
+/// written. A device or pipe ([`Destination::Through`]) is opened first (a pipe without a
+/// reader blocks there, as a shell's `>` does, before any temporary file exists) and
+/// written after the temporary files and before any rename, so that a failing device
+/// (`/dev/full`) leaves the files as they were; what was written to a device cannot be taken
+/// back if a rename fails after it (a folder made read-only meanwhile).
 pub fn write_all_atomic(files: &[(&Path, &[u8])]) -> Result<(), OutputError> {
     let dests = files
         .iter()
         .map(|(p, _)| destination(p))
         .collect::<Result<Vec<_>, _>>()?;
+    let mut devices = Vec::new();
+    for ((path, bytes), dest) in files.iter().zip(&dests) {
+        if let Destination::Through(real) = dest {
+            let f = std::fs::OpenOptions::new()
+                .write(true)
+                .open(real)
+                .map_err(|error| OutputError::Io {
+                    path: path.display().to_string(),
+                    error,
+                })?;
+            devices.push((f, path, bytes));
+        }
+    }
     let mut staged: Vec<(PathBuf, &Path, &Path)> = Vec::new();
     let cleanup = |staged: &[(PathBuf, &Path, &Path)]| {
         for (tmp, _, _) in staged {
@@ -145,16 +188,8 @@ pub fn write_all_atomic(files: &[(&Path, &[u8])]) -> Result<(), OutputError> {
         }
         staged.push((tmp, real.as_path(), path));
     }
-    for ((path, bytes), dest) in files.iter().zip(&dests) {
-        let Destination::Through(real) = dest else {
-            continue;
-        };
-        let result = (|| {
-            let mut f = std::fs::OpenOptions::new().write(true).open(real)?;
-            f.write_all(bytes)?;
-            f.flush()
-        })();
-        if let Err(error) = result {
+    for (mut f, path, bytes) in devices {
+        if let Err(error) = f.write_all(bytes).and_then(|()| f.flush()) {
             cleanup(&staged);
             return Err(OutputError::Io {
                 path: path.display().to_string(),

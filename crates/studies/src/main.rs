@@ -265,22 +265,6 @@ struct InputError(String);
 /// largest recorded peaks are about 3–4 g; a record in cm/s² read as g peaks at hundreds of g).
 const PLAUSIBLE_PGA_G: f64 = 5.0;
 
-/// Whether two output paths name the same file (the same path, or the same existing file).
-fn same_file(a: &std::path::Path, b: &std::path::Path) -> bool {
-    // The folder resolved (links, `..`), the file name as given: the file need not exist.
-    let abs = |p: &std::path::Path| {
-        let dir = match p.parent() {
-            Some(d) if !d.as_os_str().is_empty() => d,
-            _ => std::path::Path::new("."),
-        };
-        match (std::fs::canonicalize(dir), p.file_name()) {
-            (Ok(d), Some(n)) => d.join(n),
-            _ => p.to_path_buf(),
-        }
-    };
-    a == b || abs(a) == abs(b)
-}
-
 /// Scene settings the gap element takes but does not use with the scene's contact law: said
 /// on stderr, so a comparison of methods at c_r < 1 does not silently compare elastic
 /// springs with inelastic impacts.
@@ -572,7 +556,7 @@ fn run(cli: Cli) -> Result<()> {
                 }
             }
             if let (Some(o), Some(h)) = (&out, &history) {
-                if same_file(o, h) {
+                if io::same_destination(o, h) {
                     return Err(input(format!(
                         "--out and --history are the same file ({}): give two paths",
                         o.display()
@@ -773,21 +757,30 @@ fn studies_command(command: StudiesCommand) -> Result<()> {
             }
             let mut recs = Vec::new();
             for r in &records {
-                if r.is_dir() {
-                    return Err(input(format!(
-                        "--records: {} is a folder; give the record files (e.g. {}/*.AT2)",
-                        r.display(),
-                        r.display()
-                    )));
-                }
-                if r.exists() && !r.is_file() {
-                    return Err(input(format!(
-                        "--records: {} is not a regular file (a device, pipe or socket): expected a record file",
-                        r.display()
-                    )));
-                }
-                if !r.is_file() {
-                    return Err(input(format!("--records: {} does not exist", r.display())));
+                match std::fs::metadata(r) {
+                    Ok(m) if m.is_dir() => {
+                        return Err(input(format!(
+                            "--records: {} is a folder; give the record files (e.g. {}/*.AT2)",
+                            r.display(),
+                            r.display()
+                        )))
+                    }
+                    Ok(m) if !m.is_file() => {
+                        return Err(input(format!(
+                            "--records: {} is not a regular file (a device, pipe or socket): expected a record file",
+                            r.display()
+                        )))
+                    }
+                    Ok(_) => {}
+                    Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                        return Err(input(format!("--records: {} does not exist", r.display())))
+                    }
+                    Err(e) => {
+                        return Err(input(format!(
+                            "--records: {} cannot be read: {e}",
+                            r.display()
+                        )))
+                    }
                 }
                 recs.push(std::path::absolute(r)?.display().to_string());
             }

@@ -218,19 +218,71 @@ fn outputs_follow_links_and_write_through_pipes() {
         eprintln!("mkfifo unavailable: the pipe part is skipped");
         return;
     }
-    let reader = {
+    let (tx, rx) = std::sync::mpsc::channel();
+    {
         let fifo = fifo.clone();
-        std::thread::spawn(move || std::fs::read_to_string(fifo).unwrap())
-    };
+        std::thread::spawn(move || tx.send(std::fs::read_to_string(fifo)));
+    }
     let o = run_momentum(&scene(), "1", &["--out", fifo.to_str().unwrap()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let text = reader.join().unwrap();
-    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
-    assert!(v["buildings"].is_array());
+    // (Checked before waiting for the reader: a pipe replaced by a file leaves it blocked.)
     assert!(std::fs::symlink_metadata(&fifo)
         .unwrap()
         .file_type()
         .is_fifo());
+    let text = rx
+        .recv_timeout(std::time::Duration::from_secs(60))
+        .expect("the pipe's reader got the JSON")
+        .unwrap();
+    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    assert!(v["buildings"].is_array());
+}
+
+/// `/dev/stdout` as `--out` writes through whatever stdout is (its link's text is not a
+/// path when stdout is a pipe: `pipe:[N]`), and two outputs to one device are not "the same
+/// file".
+#[cfg(unix)]
+#[test]
+fn dev_stdout_and_one_device_twice_are_written_through() {
+    if !std::path::Path::new("/dev/stdout").exists() {
+        eprintln!("no /dev/stdout: skipped");
+        return;
+    }
+    let o = run_momentum(&scene(), "1", &["--out", "/dev/stdout"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("the JSON on stdout");
+    assert!(v["buildings"].is_array());
+    let o = run_momentum(
+        &scene(),
+        "1",
+        &["--out", "/dev/null", "--history", "/dev/null"],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+/// `--out` and `--history` that lead to one file through a link are refused as the same
+/// file (following the link, both were renamed onto the target and the history was lost).
+#[cfg(unix)]
+#[test]
+fn out_and_history_through_a_link_to_one_file_are_refused() {
+    let d = TempDir::new("samefile");
+    let target = d.write("target.json", "old\n");
+    let link = d.path("link.json");
+    std::os::unix::fs::symlink("target.json", &link).unwrap();
+    let o = run_momentum(
+        &scene(),
+        "1",
+        &[
+            "--out",
+            link.to_str().unwrap(),
+            "--history",
+            target.to_str().unwrap(),
+        ],
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("the same file"), "{err}");
+    assert_eq!(std::fs::read_to_string(&target).unwrap(), "old\n");
 }
 
 /// A device that fails the write (/dev/full: no space) fails the run's output with exit 1
@@ -246,13 +298,7 @@ fn a_failing_device_fails_the_output_and_stays_a_device() {
     }
     let d = TempDir::new("devfull");
     let hist = d.path("history.csv");
-    let o = run_momentum(
-        &scene(),
-        "1",
-        &["--history", hist.to_str().unwrap(), "--out", "/dev/full"],
-    );
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(1), "{err}");
+    let err = failed_output(&d, &hist, full);
     assert!(err.contains("/dev/full") && err.contains("space"), "{err}");
     assert!(std::fs::metadata(full)
         .unwrap()

@@ -143,7 +143,7 @@ pub fn solve_checked(a: Vec<Vec<f64>>, b: Vec<f64>) -> Option<Vec<f64>> {
 #[derive(Debug, Clone)]
 pub struct Factored {
     /// The eliminated matrix: its upper triangle, and below the diagonal the multipliers
-    /// a_ik / a_kk of step k at [i][k] (entries elimination no longer reads).
+    /// a_ik / a_kk of step k at \[i\]\[k\] (entries elimination no longer reads).
     lu: Vec<Vec<f64>>,
     /// The row exchanged with row k at step k.
     pivots: Vec<usize>,

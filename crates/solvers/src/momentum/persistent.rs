@@ -294,7 +294,7 @@ impl Stepper<'_> {
 
     /// The held trajectory over [0, s] from the current state: forces linear in time from
     /// the instantaneous holding forces `lam0` at the start to the end forces that bring
-    /// every held gap to its target at s ([`Stepper::held_target`]; see [`persistent`]).
+    /// every held gap to its target at s ([`Stepper::held_target`]; see [`super::persistent`]).
     pub(super) fn held_trial(
         &self,
         set: &[usize],

@@ -29,10 +29,11 @@ use crate::{BuildingResponse, History, Impact, PersistentContact, SolverError, S
 /// Relative size of the energy-audit residual (and of a negative contact or damping
 /// account) beyond which a run is stopped as untrustworthy: the method closes its audit to
 /// round-off (1e-13 to 1e-11 of the energy scale on the robustness sweep and the randomized
-/// tests), so 1e-6 is far from any sound run. The scale is initial + |input| + final energy
-/// plus [`Problem::static_energy`], the size of the closed form's terms, whose round-off
-/// (about ε of it) is all a run too short to gather energy has: a run of 1e-9 s closed to
-/// 5.7e-17 J of energies of 2e-16 J and was stopped before it was part of the scale.
+/// tests), so 1e-6 is far from any sound run. The end audit's scale is initial + |input| +
+/// final energy plus [`Problem::static_energy`], the size of the closed form's terms, whose
+/// round-off (about ε of it) is all a run too short to gather energy has: a run of 1e-9 s
+/// closed to 5.7e-17 J of energies of about 1e-16 J and was stopped before it was part of
+/// the scale.
 pub const AUDIT_TOLERANCE: f64 = 1e-6;
 
 /// The mutable state: time, modal coordinates, contacts held together.
@@ -169,7 +170,7 @@ pub struct Stepper<'a> {
     pub(super) ud_prev: Vec<f64>,
     /// The interval integrated since the previous sample (continuous peaks, [`peaks`]).
     pub(super) interval: peaks::Interval,
-    /// Story-shear coefficients c_n = k_j (φ_n[j] − φ_n[j−1]) per building, story-major.
+    /// Story-shear coefficients c_n = k_j (φ_n\[j\] − φ_n\[j−1\]) per building, story-major.
     pub(super) shear_rows: Vec<Vec<f64>>,
     /// Scratch: the coefficients of one response quantity.
     pub(super) coef: Vec<f64>,
@@ -1298,7 +1299,9 @@ impl<'a> Stepper<'a> {
                 ),
             });
         }
-        if balance.abs() > AUDIT_TOLERANCE * self.energy_scale(e.input, final_e) {
+        let static_energy = Some(self.p.static_energy).filter(|s| s.is_finite());
+        let scale = e.initial + e.input.abs() + final_e + static_energy.unwrap_or(0.0);
+        if balance.abs() > AUDIT_TOLERANCE * scale {
             return Err(SolverError::Stalled {
                 time: self.s.t,
                 reason: format!(
@@ -1324,21 +1327,16 @@ impl<'a> Stepper<'a> {
         )
     }
 
-    /// The energy audit's scale, J: initial + |input| + present energy + the static energy of
-    /// the largest ground load ([`AUDIT_TOLERANCE`]).
-    fn energy_scale(&self, input: f64, now: f64) -> f64 {
-        self.energy.initial + input.abs() + now + self.p.static_energy
-    }
-
     /// Held contacts and impacts can only remove energy: a contact account (the running
-    /// total, not one phase's part) below −[`AUDIT_TOLERANCE`] of the energy scale
-    /// ([`Stepper::energy_scale`], with the input so far) means a held phase went wrong, and the run stops
+    /// total, not one phase's part) below −[`AUDIT_TOLERANCE`] of the energy scale (initial +
+    /// |input| so far + present energy; not the end audit's static energy of the whole run's
+    /// largest load, which would judge an early phase by a later load) means a held phase went wrong, and the run stops
     /// there, saying so, instead of returning garbage.
     pub(super) fn check_contact_account(&self) -> Result<(), SolverError> {
         let e = &self.energy;
         let input = e.input + self.fast_works().0;
         let now = self.p.modal.energy(&self.s.x, &self.s.v);
-        if e.contact < -AUDIT_TOLERANCE * self.energy_scale(input, now) {
+        if e.contact < -AUDIT_TOLERANCE * (e.initial + input.abs() + now) {
             return Err(SolverError::Stalled {
                 time: self.s.t,
                 reason: format!(
