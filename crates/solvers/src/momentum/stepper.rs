@@ -565,6 +565,16 @@ impl<'a> Stepper<'a> {
         }
         st.overlap_inv = st.overlap_rows.iter().map(|r| inv_f(r, 0)).collect();
         st.energy.initial = p.modal.energy(&st.s.x, &st.s.v);
+        if !st.energy.initial.is_finite() {
+            return Err(SolverError::NonFinite {
+                time: 0.0,
+                context: format!(
+                    "the initial energy is not finite ({:e} J): the initial state is too large \
+                     to compute with",
+                    st.energy.initial
+                ),
+            });
+        }
         for (c, ct) in p.contacts.iter().enumerate() {
             let d = ct.delta(&st.s.x);
             if d > 1e-9 * ct.gap.max(1e-3) {
