@@ -1485,34 +1485,23 @@ fn validate(
                 }
             }
             let path = base_dir.join(&g.file);
-            // What the path names, links followed; an error other than "not found" (a
-            // folder that cannot be searched, a loop of links) is said as it is.
-            let shown = path.display();
-            let refused = match std::fs::metadata(&path) {
-                Ok(m) if m.is_dir() => {
-                    Some(format!("record file {shown} is a directory, not a file"))
-                }
-                Ok(m) if !m.is_file() => Some(format!(
-                    "record file {shown} is not a regular file (a device, pipe or socket): \
-                     expected a record file"
-                )),
-                Ok(_) => None,
-                Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-                    let relative = if Path::new(&g.file).is_relative() {
+            if let Some(problem) = crate::ground::record_path_problem(&path) {
+                let relative = match problem {
+                    crate::ground::RecordPathProblem::Missing
+                        if Path::new(&g.file).is_relative() =>
+                    {
                         format!(
                             " (`{}` is taken relative to the scene's folder, {})",
                             g.file,
                             folder_name(base_dir)
                         )
-                    } else {
-                        String::new()
-                    };
-                    Some(format!("record file {shown} does not exist{relative}"))
-                }
-                Err(e) => Some(format!("record file {shown} cannot be read: {e}")),
-            };
-            if let Some(msg) = refused {
-                return Err(invalid(key("file"), msg));
+                    }
+                    _ => String::new(),
+                };
+                return Err(invalid(
+                    key("file"),
+                    format!("record file {} {problem}{relative}", path.display()),
+                ));
             }
             let rec = GroundMotion::load(&path, &format).map_err(|source| SceneError::Record {
                 file: origin.to_string(),

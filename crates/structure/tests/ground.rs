@@ -902,3 +902,24 @@ proptest! {
         }
     }
 }
+
+/// `peak_abs` (four running maxima, used by `pga` and the momentum method's audit scale) is
+/// the one-by-one fold of |v| for every length and position of the peak, NaNs skipped alike.
+#[test]
+fn peak_abs_is_the_fold_of_abs() {
+    use structure::ground::peak_abs;
+    let fold = |v: &[f64]| v.iter().fold(0.0f64, |m, a| m.max(a.abs()));
+    for n in 0..13 {
+        for at in 0..n.max(1) {
+            let mut v: Vec<f64> = (0..n).map(|i| ((i * 7 % 5) as f64 - 2.0) * 0.1).collect();
+            if n > 0 {
+                v[at] = -3.5;
+            }
+            assert_eq!(peak_abs(&v), fold(&v), "{v:?}");
+            if n > 1 {
+                v[(at + 1) % n] = f64::NAN;
+                assert_eq!(peak_abs(&v), fold(&v), "{v:?}");
+            }
+        }
+    }
+}

@@ -757,30 +757,18 @@ fn studies_command(command: StudiesCommand) -> Result<()> {
             }
             let mut recs = Vec::new();
             for r in &records {
-                match std::fs::metadata(r) {
-                    Ok(m) if m.is_dir() => {
+                match structure::ground::record_path_problem(r) {
+                    Some(structure::ground::RecordPathProblem::Folder) => {
                         return Err(input(format!(
                             "--records: {} is a folder; give the record files (e.g. {}/*.AT2)",
                             r.display(),
                             r.display()
                         )))
                     }
-                    Ok(m) if !m.is_file() => {
-                        return Err(input(format!(
-                            "--records: {} is not a regular file (a device, pipe or socket): expected a record file",
-                            r.display()
-                        )))
+                    Some(problem) => {
+                        return Err(input(format!("--records: {} {problem}", r.display())))
                     }
-                    Ok(_) => {}
-                    Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-                        return Err(input(format!("--records: {} does not exist", r.display())))
-                    }
-                    Err(e) => {
-                        return Err(input(format!(
-                            "--records: {} cannot be read: {e}",
-                            r.display()
-                        )))
-                    }
+                    None => {}
                 }
                 recs.push(std::path::absolute(r)?.display().to_string());
             }

@@ -88,9 +88,9 @@ pub struct Problem {
     /// closed form's particular (f/ω²) and homogeneous parts cancel over a short segment, so
     /// its energies carry round-off of about ε times this whatever the run's own energies
     /// (1–2 ε of it on a 3 + 3-floor pair over runs of 1e-12 … 1e-3 s, whose energies are far
-    /// below it); it is part of the end audit's scale ([`super::stepper::AUDIT_TOLERANCE`];
-    /// infinite, for accelerations near 1e154 m/s², it is left out rather than switch the
-    /// audit off).
+    /// below it); it is part of the end audit's scale ([`super::stepper::AUDIT_TOLERANCE`]).
+    /// 0 where it would be infinite (accelerations near 1e154 m/s²), rather than switch the
+    /// audit off.
     pub static_energy: f64,
 }
 
@@ -190,22 +190,10 @@ impl Problem {
         if let Some(g) = &scene.ground {
             let covered = n_steps.min(g.npts().saturating_sub(1) * split);
             // The record's samples the covered steps span (an interpolant lies between two of
-            // them; the steps past the record's end have a_g = 0), in four running maxima (not
-            // f64::max, whose NaN rule keeps it from vectorising; the values are finite):
-            // 0.1 % of the paper scene's instructions, against 0.4 % as one f64::max fold.
-            let used = &g.accel[..(covered.div_ceil(split) + 1).min(g.npts())];
-            let mut lanes = [0.0f64; 4];
-            let chunks = used.chunks_exact(4);
-            for &a in chunks.remainder() {
-                lanes[0] = lanes[0].max(a.abs());
-            }
-            for c in chunks {
-                for (m, a) in lanes.iter_mut().zip(c) {
-                    let a = a.abs();
-                    *m = if a > *m { a } else { *m };
-                }
-            }
-            a_max = lanes.into_iter().fold(0.0, f64::max);
+            // them; the steps past the record's end have a_g = 0).
+            a_max = structure::ground::peak_abs(
+                &g.accel[..(covered.div_ceil(split) + 1).min(g.npts())],
+            );
             if split == 1 {
                 // The record's own grid (the common case): its samples as they are.
                 ag_start.extend_from_slice(&g.accel[..covered]);
@@ -241,9 +229,15 @@ impl Problem {
         let full = StepCoeffs::new(&modal, h);
         let omega2: Vec<f64> = modal.omega.iter().map(|w| w * w).collect();
         let gamma_norm = modal.gamma.iter().map(|g| g * g).sum::<f64>().sqrt();
-        let static_energy = (0..modal.len())
+        let static_energy: f64 = (0..modal.len())
             .map(|n| 0.5 * (modal.gamma[n] * a_max).powi(2) / omega2[n])
             .sum();
+        // (Infinite for accelerations near 1e154 m/s²: 0 then, not an audit switched off.)
+        let static_energy = if static_energy.is_finite() {
+            static_energy
+        } else {
+            0.0
+        };
         let sqrt_w = contacts
             .iter()
             .map(|c: &ContactGeom| c.dot(&c.g).sqrt())

@@ -1309,8 +1309,7 @@ impl<'a> Stepper<'a> {
                 ),
             });
         }
-        let static_energy = Some(self.p.static_energy).filter(|s| s.is_finite());
-        let scale = e.initial + e.input.abs() + final_e + static_energy.unwrap_or(0.0);
+        let scale = e.initial + e.input.abs() + final_e + self.p.static_energy;
         if balance.abs() > AUDIT_TOLERANCE * scale {
             return Err(SolverError::Stalled {
                 time: self.s.t,
@@ -1340,8 +1339,8 @@ impl<'a> Stepper<'a> {
     /// Held contacts and impacts can only remove energy: a contact account (the running
     /// total, not one phase's part) below −[`AUDIT_TOLERANCE`] of the energy scale (initial +
     /// |input| so far + present energy; not the end audit's static energy of the whole run's
-    /// largest load, which would judge an early phase by a later load) means a held phase went wrong, and the run stops
-    /// there, saying so, instead of returning garbage.
+    /// largest load, which would judge an early phase by a later load) means a held phase
+    /// went wrong, and the run stops there, saying so, instead of returning garbage.
     pub(super) fn check_contact_account(&self) -> Result<(), SolverError> {
         let e = &self.energy;
         let input = e.input + self.fast_works().0;

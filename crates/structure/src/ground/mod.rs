@@ -5,5 +5,8 @@ pub mod record;
 pub mod spectrum;
 
 pub use nigam_jennings::Propagator;
-pub use record::{GroundMotion, ParseUnitsError, RecordError, RecordFormat, Units};
+pub use record::{
+    peak_abs, record_path_problem, GroundMotion, ParseUnitsError, RecordError, RecordFormat,
+    RecordPathProblem, Units,
+};
 pub use spectrum::{default_periods, response_spectrum, SpectrumPoint};

@@ -391,6 +391,61 @@ fn parse_number(text: &str) -> Option<f64> {
     }
 }
 
+/// max |v| over `values` (0 for none), in four running maxima (not `f64::max`, whose NaN
+/// rule keeps it from vectorising; a NaN is skipped as `f64::max` skips it): the same value
+/// as the one-by-one fold, a maximum being exact. (The momentum method scans the record
+/// for every analysis: 0.1 % of the paper scene's instructions, against 0.4 % as the fold.)
+pub fn peak_abs(values: &[f64]) -> f64 {
+    let mut lanes = [0.0f64; 4];
+    let chunks = values.chunks_exact(4);
+    for &a in chunks.remainder() {
+        lanes[0] = lanes[0].max(a.abs());
+    }
+    for c in chunks {
+        for (m, a) in lanes.iter_mut().zip(c) {
+            let a = a.abs();
+            *m = if a > *m { a } else { *m };
+        }
+    }
+    lanes.into_iter().fold(0.0, f64::max)
+}
+
+/// Why a record path cannot be read as a record file ([`record_path_problem`]).
+#[derive(Debug)]
+pub enum RecordPathProblem {
+    Folder,
+    /// A device, pipe or socket.
+    NotRegular,
+    Missing,
+    /// Anything else the system says (a folder that cannot be searched, a loop of links).
+    Unreadable(std::io::Error),
+}
+
+impl fmt::Display for RecordPathProblem {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Folder => f.write_str("is a directory, not a file"),
+            Self::NotRegular => f.write_str(
+                "is not a regular file (a device, pipe or socket): expected a record file",
+            ),
+            Self::Missing => f.write_str("does not exist"),
+            Self::Unreadable(e) => write!(f, "cannot be read: {e}"),
+        }
+    }
+}
+
+/// What is wrong with `path` as a record file, links followed; `None` for a regular file.
+/// (`is_file()` and `exists()` said "does not exist" for a device or a loop of links.)
+pub fn record_path_problem(path: &Path) -> Option<RecordPathProblem> {
+    match std::fs::metadata(path) {
+        Ok(m) if m.is_dir() => Some(RecordPathProblem::Folder),
+        Ok(m) if !m.is_file() => Some(RecordPathProblem::NotRegular),
+        Ok(_) => None,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Some(RecordPathProblem::Missing),
+        Err(e) => Some(RecordPathProblem::Unreadable(e)),
+    }
+}
+
 /// `v` (in `units`, read at `line`) in m/s², or [`RecordError::Overflow`] when that is not
 /// finite (1e308 g is finite, 9.8e308 m/s² is not).
 fn si(v: f64, units: Units, origin: &str, line: usize) -> Result<f64, RecordError> {
@@ -823,7 +878,7 @@ impl GroundMotion {
 
     /// Peak ground acceleration max |a|, m/s².
     pub fn pga(&self) -> f64 {
-        self.accel.iter().fold(0.0, |m: f64, a| m.max(a.abs()))
+        peak_abs(&self.accel)
     }
 
     /// Peak ground velocity, m/s: the peak of |v(t)| over the whole record (between samples
