@@ -22,6 +22,13 @@ pub mod testing;
 /// Standard gravity, m/s².
 pub const G: f64 = 9.80665;
 
+/// `n` and a noun in the singular or the plural as `n` asks (`1 entry`, `2 entries`, `0
+/// records`), for messages and reports (the `studies` crate's too).
+pub fn count<T: std::fmt::Display + PartialEq + From<u8>>(n: T, one: &str, many: &str) -> String {
+    let noun = if n == T::from(1) { one } else { many };
+    format!("{n} {noun}")
+}
+
 pub use ground::{GroundMotion, RecordError, RecordFormat, Units};
 pub use model::{Building, Damping, ModelError, Modes};
 pub use scene::{Contact, GapElementOptions, MomentumOptions, Purpose, Scene, SceneError};

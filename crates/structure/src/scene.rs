@@ -236,6 +236,12 @@ pub struct Scene {
     /// missing for a building index (a scene built in code) counts as `None`.
     pub story_heights: Vec<Option<Vec<f64>>>,
     pub contacts: Vec<Contact>,
+    /// For each of [`Scene::contacts`], the index of the scene file's `[[contacts]]` entry it
+    /// comes from: a `floors = "aligned"` entry expands to several contacts, all with its
+    /// index. Read it through [`Scene::contact_source`]: a scene built in code may leave it
+    /// empty (contact i then comes from entry i), and a contact past its end (added in code)
+    /// counts as an entry of its own.
+    pub contact_sources: Vec<usize>,
     /// Ground acceleration (m/s², already scaled); `None` = free vibration.
     pub ground: Option<GroundMotion>,
     pub ground_source: Option<GroundMotionSource>,
@@ -340,6 +346,20 @@ fn facings(buildings: &[Building], heights: &[Option<Vec<f64>>], a: usize, b: us
 }
 
 impl Scene {
+    /// The scene file's `[[contacts]]` entry (0-based) contact `i` comes from
+    /// ([`Scene::contact_sources`]). A contact past the end of that list is an entry of its
+    /// own, numbered on from the last one listed: with an empty list, contact i comes from
+    /// entry i.
+    pub fn contact_source(&self, i: usize) -> usize {
+        match self.contact_sources.get(i) {
+            Some(&entry) => entry,
+            None => match self.contact_sources.last() {
+                Some(&last) => last + 1 + (i - self.contact_sources.len()),
+                None => i,
+            },
+        }
+    }
+
     /// The facing floors of buildings `a` and `b` (indices in [`Scene::buildings`]).
     pub fn facings(&self, a: usize, b: usize) -> Facings {
         facings(&self.buildings, &self.story_heights, a, b)
@@ -688,11 +708,13 @@ pub fn apply_override(table: &mut toml::Table, expr: &str) -> Result<(), SceneEr
                         "`{so_far}` is an array: expected a numeric index, found `{seg}`"
                     ))
                 })?;
-                let len = arr.len();
+                let len = match arr.len() {
+                    0 => "no entries".to_string(),
+                    1 => "1 entry (index 0)".to_string(),
+                    n => format!("{n} entries (indices 0 … {})", n - 1),
+                };
                 let slot = arr.get_mut(idx).ok_or_else(|| {
-                    fail(format!(
-                        "index {idx} is out of range: `{so_far}` has {len} entries"
-                    ))
+                    fail(format!("index {idx} is out of range: `{so_far}` has {len}"))
                 })?;
                 if last {
                     return match parsed {
@@ -834,9 +856,10 @@ fn validate(
                 return Err(invalid(
                     key("damping_ratio"),
                     format!(
-                        "a list of {} ratio(s) for a building of {} floors: expected one ratio per mode ({}), or a single number for every mode",
+                        "a list of {} ratio(s) for a building of {}: expected one ratio per \
+                         mode ({}), or a single number for every mode",
                         v.len(),
-                        masses.len(),
+                        crate::count(masses.len(), "floor", "floors"),
                         masses.len()
                     ),
                 ));
@@ -894,9 +917,9 @@ fn validate(
                     return Err(invalid(
                         key("story_height"),
                         format!(
-                            "has {} values, expected {n} (one height per story, story 1 first), \
+                            "has {}, expected {n} (one height per story, story 1 first), \
                              or a single number for every story",
-                            hs.len()
+                            crate::count(hs.len(), "value", "values")
                         ),
                     ));
                 }
@@ -1014,8 +1037,8 @@ fn validate(
             return Err(invalid(
                 key("story_stiffness"),
                 format!(
-                    "has {} values, expected {n} (one per story, as `masses`)",
-                    stiffness.len()
+                    "has {}, expected {n} (one per story, as `masses`)",
+                    crate::count(stiffness.len(), "value", "values")
                 ),
             ));
         }
@@ -1093,10 +1116,11 @@ fn validate(
                 which,
                 format!(
                     "story stiffnesses from {k_min:e} to {k_max:e} N/m (ratio {k_ratio:.3e}) and \
-                     masses from {m_min:e} to {m_max:e} kg (ratio {m_ratio:.3e}) on {n} floor(s) \
+                     masses from {m_min:e} to {m_max:e} kg (ratio {m_ratio:.3e}) on {} \
                      make the modes ill-conditioned: expected (largest / smallest story \
                      stiffness) × (largest / smallest mass) × floors² at most {MAX_SPREAD:e}, \
-                     found {spread:.3e}"
+                     found {spread:.3e}",
+                    crate::count(n, "floor", "floors")
                 ),
             ));
         }
@@ -1216,8 +1240,13 @@ fn validate(
                 return Err(invalid(
                     key(k),
                     format!(
-                        "floor {f} is out of range: `{}` has floors 1 … {n}",
-                        buildings[b].name
+                        "floor {f} is out of range: `{}` has {}",
+                        buildings[b].name,
+                        if n == 1 {
+                            "only floor 1".to_string()
+                        } else {
+                            format!("floors 1 … {n}")
+                        }
                     ),
                 ));
             }
@@ -1405,9 +1434,14 @@ fn validate(
                     )
                 })?,
             };
+            // Without `format`: AT2 for a name ending in .at2 (any case), else one-column
+            // when `dt` is given (only a one-column record takes it, as `pound record FILE
+            // --dt S` reads it), else two-column.
             let fmt_name = g.format.clone().unwrap_or_else(|| {
                 if g.file.to_ascii_lowercase().ends_with(".at2") {
                     "at2".into()
+                } else if g.dt.is_some() {
+                    "one-column".into()
                 } else {
                     "two-column".into()
                 }
@@ -1434,7 +1468,9 @@ fn validate(
                     if g.dt.is_some() {
                         return Err(invalid(
                             key("dt"),
-                            "a two-column record takes its dt from the time column; remove `dt`"
+                            "format \"two-column\": a two-column record takes its dt from the \
+                             time column; remove `dt` (or, for a file of acceleration values \
+                             only, give format \"one-column\" or no format)"
                                 .into(),
                         ));
                     }
@@ -1693,6 +1729,7 @@ fn validate(
         buildings,
         story_heights,
         contacts,
+        contact_sources: entry_of,
         ground,
         ground_source,
         duration,
@@ -1757,9 +1794,9 @@ fn parse_story_law(
                     return Err((
                         key("yield_shear"),
                         format!(
-                            "has {} values, expected {n} (one per story, story 1 first), or a \
+                            "has {}, expected {n} (one per story, story 1 first), or a \
                              single number for every story",
-                            fs.len()
+                            crate::count(fs.len(), "value", "values")
                         ),
                     ))
                 }

@@ -6,7 +6,8 @@ use crate::ground::GroundMotion;
 use crate::model::Building;
 use crate::scene::{Contact, GapElementOptions, Limits, MomentumOptions, Scene};
 
-/// A scene without ground motion built in code.
+/// A scene without ground motion built in code. Its `contact_sources` is empty: contact i
+/// counts as the scene's entry i ([`Scene::contact_source`]).
 pub fn free_scene(buildings: Vec<Building>, contacts: Vec<Contact>, duration: f64) -> Scene {
     Scene {
         name: "test".into(),
@@ -14,6 +15,7 @@ pub fn free_scene(buildings: Vec<Building>, contacts: Vec<Contact>, duration: f6
         story_heights: vec![None; buildings.len()],
         buildings,
         contacts,
+        contact_sources: Vec::new(),
         ground: None,
         ground_source: None,
         duration,

@@ -923,3 +923,138 @@ fn peak_abs_is_the_fold_of_abs() {
         }
     }
 }
+
+// ---------------------------------------------------------------------------------------
+// What two- and one-column readers accept (docs/scenes.md), and header lines
+// ---------------------------------------------------------------------------------------
+
+#[test]
+fn two_column_separators_comments_and_blank_lines_as_documented() {
+    // A byte-order mark, `#` comment lines (also indented), a trailing comment, blank and
+    // whitespace-only lines, CRLF endings; whitespace (tabs too), commas and semicolons,
+    // several in a row counting as one; a sign inside a token starting the next value; a
+    // Fortran `D` exponent.
+    let text = "\u{feff}# time (s), accel (g)\r\n   # indented comment\r\n0.00;0.1\r\n\r\n  \t \n\
+                0.01 , 0.2   # trailing comment\n0.02\t\t-0.3\n0.03,,0.4\n0.04-0.5\n0.05 1.0D-1\n";
+    let gm = GroundMotion::from_two_column_str(text, "sep.csv", Units::G).unwrap();
+    let want = [0.1, 0.2, -0.3, 0.4, -0.5, 0.1];
+    assert_eq!(gm.npts(), want.len());
+    assert!(rel(gm.dt, 0.01) < 1e-12, "{}", gm.dt);
+    for (a, w) in gm.accel.iter().zip(want) {
+        assert!((a - w * G).abs() < 1e-12, "{a} vs {w}");
+    }
+    // One-column files take the same separators and comments, any number of values a line.
+    let one = "# accel (g)\n0.1, 0.2; 0.3\n\n0.4 # trailing\n-0.5-0.6\n";
+    let gm = GroundMotion::from_one_column_str(one, "one.txt", 0.01, Units::G).unwrap();
+    assert_eq!(gm.npts(), 6);
+    assert!((gm.accel[5] + 0.6 * G).abs() < 1e-12);
+}
+
+#[test]
+fn a_header_line_gets_a_hint_naming_the_file_and_line() {
+    let hint = "a header line is not read: remove it or start it with `#`";
+    let data = "0.00,0.1\n0.01,0.2\n0.02,0.3\n";
+    // Two-column: a header of two words, of three words, and after comments and blank lines.
+    for (text, line) in [
+        (format!("time_s,accel_g\n{data}"), 1),
+        (format!("time (s) accel (g)\n{data}"), 1),
+        (format!("# recorded 2024\n\nTime Accel\n{data}"), 3),
+    ] {
+        let e = GroundMotion::from_two_column_str(&text, "h.csv", Units::G).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                RecordError::Value {
+                    header: true,
+                    column: 1,
+                    ..
+                }
+            ),
+            "{e:?}"
+        );
+        msg_has(
+            &e,
+            &[
+                &format!("h.csv line {line}, column 1"),
+                "expected a number (time in s)",
+                hint,
+            ],
+        );
+    }
+    let e =
+        GroundMotion::from_two_column_str(&format!("time_s,accel_g\n{data}"), "h.csv", Units::G)
+            .unwrap_err();
+    msg_has(&e, &["found \"time_s\""]);
+    // Commented out, the header is read as a comment.
+    let gm =
+        GroundMotion::from_two_column_str(&format!("# time_s,accel_g\n{data}"), "h.csv", Units::G)
+            .unwrap();
+    assert_eq!(gm.npts(), 3);
+    // A word below the first line of numbers, or after a number on the first line, is a
+    // bad value, not a header: no hint.
+    for text in ["0 1\nfoo 2\n0.02 3\n", "0 accel\n0.01 2\n"] {
+        let e = GroundMotion::from_two_column_str(text, "w.csv", Units::G).unwrap_err();
+        assert!(
+            matches!(e, RecordError::Value { header: false, .. }),
+            "{e:?}"
+        );
+        assert!(!e.to_string().contains("header"), "{e}");
+    }
+    // One-column: the same hint on the first line of values only.
+    let e = GroundMotion::from_one_column_str("# x\naccel_g\n0.1\n0.2\n", "o.txt", 0.01, Units::G)
+        .unwrap_err();
+    msg_has(
+        &e,
+        &[
+            "o.txt line 2, column 1",
+            "expected a number (acceleration in g)",
+            "found \"accel_g\"",
+            hint,
+        ],
+    );
+    let e =
+        GroundMotion::from_one_column_str("0.1\n0.2\nfoo\n", "o.txt", 0.01, Units::G).unwrap_err();
+    msg_has(&e, &["o.txt line 3"]);
+    assert!(!e.to_string().contains("header"), "{e}");
+    // AT2 files have no `#` comments: their data lines get no such hint.
+    let e = at2_err(&at2("NPTS= 2, DT= 0.01 SEC", "time accel\n"));
+    assert!(!e.to_string().contains("header line"), "{e}");
+}
+
+#[test]
+fn a_two_column_file_read_as_one_column_names_the_line_and_says_what_to_do() {
+    let parts = [
+        "two.txt line 2",
+        "read as one-column because a time step was given",
+        "found 2 values on this line",
+        "rising by 0.01",
+        "a two-column record",
+        "read it as two-column",
+        "remove dt",
+    ];
+    let text = "# t, a\n0.00 0.1\n0.01 0.2\n0.02 0.3\n";
+    let e = GroundMotion::from_one_column_str(text, "two.txt", 0.01, Units::G).unwrap_err();
+    assert!(
+        matches!(e, RecordError::TwoColumnsAsOne { line: 2, .. }),
+        "{e:?}"
+    );
+    msg_has(&e, &parts);
+    // With a header line above the columns, the columns are what is reported.
+    let text = "t,a\n0.00,0.1\n0.01,0.2\n0.02,0.3\n";
+    let e = GroundMotion::from_one_column_str(text, "two.txt", 0.01, Units::G).unwrap_err();
+    msg_has(&e, &parts);
+}
+
+#[test]
+fn counts_of_one_are_singular() {
+    let e = at2_err(&at2("NPTS= 3, DT= 0.01 SEC", "1.0\n"));
+    msg_has(
+        &e,
+        &["NPTS = 3, but the file holds 1 value (expected exactly 3)"],
+    );
+    let e = at2_err(&at2("NPTS= 1, DT= 0.01 SEC", "1.0 2.0\n"));
+    msg_has(
+        &e,
+        &["NPTS = 1, but the file holds 2 values (expected exactly 1)"],
+    );
+}

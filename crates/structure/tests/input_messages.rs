@@ -612,3 +612,71 @@ fn a_record_that_is_a_device_is_named_so() {
     assert!(!msg.contains("does not exist"), "{msg}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+// ---------------------------------------------------------------------------------------
+// Counts of one in messages: "1 value", "1 floor", "1 entry"
+// ---------------------------------------------------------------------------------------
+
+#[test]
+fn counts_of_one_are_singular_in_scene_messages() {
+    let two = "masses = [1e6, 1e6]\nstory_stiffness = [1e9, 1e9]\n";
+    for (body, key, want) in [
+        (
+            format!("{two}story_height = [3.0]"),
+            "buildings[0].story_height",
+            "has 1 value, expected 2",
+        ),
+        (
+            "masses = [1e6, 1e6]\nstory_stiffness = [1e9]".to_string(),
+            "buildings[0].story_stiffness",
+            "has 1 value, expected 2",
+        ),
+        (
+            format!("{two}story_law = \"bilinear\"\nyield_shear = [1e6]"),
+            "buildings[0].yield_shear",
+            "has 1 value, expected 2",
+        ),
+        (
+            "masses = [1e6]\nstory_stiffness = [1e9]\ndamping_ratio = [0.05, 0.02]".to_string(),
+            "buildings[0].damping_ratio",
+            "a list of 2 ratio(s) for a building of 1 floor:",
+        ),
+    ] {
+        let m = err_has(load(&one(&body), &[]), &["scene.toml", key, want]);
+        assert!(!m.contains(" 1 values") && !m.contains(" 1 floors"), "{m}");
+    }
+    // A floor out of range of a one-storey building; an index past a one-entry array.
+    let text = "[[buildings]]\nname = \"a\"\nmasses = [1e6]\nstory_stiffness = [1e9]\n\
+                [[buildings]]\nname = \"b\"\nmasses = [1e6]\nstory_stiffness = [1e9]\n\
+                [[contacts]]\nleft = \"a\"\nleft_floor = 2\nright = \"b\"\nright_floor = 1\n\
+                gap = 0.01\n[analysis]\nduration = 1.0\n";
+    err_has(
+        load(text, &[]),
+        &[
+            "contacts[0].left_floor",
+            "floor 2 is out of range: `a` has only floor 1",
+        ],
+    );
+    let m = err_has(
+        load(text, &["buildings.0.masses.1=1e6"]),
+        &[
+            "--set buildings.0.masses.1=1e6",
+            "`buildings.0.masses` has 1 entry (index 0)",
+        ],
+    );
+    assert!(!m.contains("entries"), "{m}");
+    // A building built in code: its own checks count the same way.
+    let mut b = Building::new("c", vec![1e6, 1e6], vec![1e9, 1e9], 0.05);
+    b.initial_velocity = vec![0.0];
+    let m = b.validate().unwrap_err().to_string();
+    assert!(
+        m.contains("`initial_velocity` has 1 value, expected 2"),
+        "{m}"
+    );
+    let b = Building::new("c", vec![1e6, 1e6], vec![1e9], 0.05);
+    let m = b.validate().unwrap_err().to_string();
+    assert!(
+        m.contains("`story_stiffness` has 1 value but `masses` has 2"),
+        "{m}"
+    );
+}

@@ -189,7 +189,18 @@ fn set_errors_name_the_expression() {
         load_str(TINY, &["contacts.3.gap=0.05"]),
         &["--set contacts.3.gap=0.05"],
     );
-    assert!(m.contains("out of range") && m.contains("1 entries"), "{m}");
+    assert!(
+        m.contains("out of range") && m.contains("has 1 entry (index 0)"),
+        "{m}"
+    );
+    assert!(!m.contains("entries"), "{m}");
+    err_has(
+        load_str(TINY, &["buildings.2.name=c"]),
+        &[
+            "index 2 is out of range",
+            "`buildings` has 2 entries (indices 0 … 1)",
+        ],
+    );
     err_has(
         load_str(TINY, &["contacts.0.gap"]),
         &["--set contacts.0.gap", "PATH=VALUE"],
@@ -457,9 +468,11 @@ fn ground_motion_errors_name_the_key() {
             &["ground_motion.format=csv"],
             &["ground_motion.format", "`csv`"],
         ),
+        // `dt` without `format` reads the file as one-column: a two-column file is refused
+        // by the record reader (`a_dt_without_format_reads_one_column`).
         (
-            &["ground_motion.dt=0.01"],
-            &["ground_motion.dt", "two-column"],
+            &["ground_motion.format=two-column", "ground_motion.dt=0.01"],
+            &["ground_motion.dt", "two-column", "remove `dt`"],
         ),
         (
             &["ground_motion.format=one-column"],
@@ -1117,6 +1130,183 @@ fn duplicates_after_aligned_expansion_are_refused() {
             "duplicate contact",
             "floor 2 of `b`",
             "contacts[0]",
+        ],
+    );
+}
+
+// ---------------------------------------------------------------------------------------
+// Record format inference: `dt` without `format`
+// ---------------------------------------------------------------------------------------
+
+/// TINY with a `[ground_motion]` table holding `gm`.
+fn with_record(gm: &str) -> String {
+    format!("{TINY}\n[ground_motion]\n{gm}\n")
+}
+
+#[test]
+fn a_dt_without_format_reads_one_column() {
+    // `pulse.txt` holds values only (four to a line): `dt` alone makes it one-column, as
+    // `pound record pulse.txt --dt 0.01` reads it.
+    let s = load_str(
+        &with_record("file = \"pulse.txt\"\ndt = 0.01\nunits = \"m/s^2\""),
+        &[],
+    )
+    .unwrap();
+    let src = s.ground_source.as_ref().unwrap();
+    assert_eq!(
+        src.format,
+        RecordFormat::OneColumn {
+            dt: 0.01,
+            units: Units::MetersPerSecond2
+        }
+    );
+    let g = s.ground.as_ref().unwrap();
+    assert_eq!((g.npts(), g.dt), (9, 0.01));
+    assert_eq!(g.accel[2], 1.0);
+    // The same through `--set`, and with an upper-case extension that is not .at2.
+    let s = load_str(
+        &with_record("file = \"pulse.txt\""),
+        &["ground_motion.dt=0.02"],
+    );
+    assert!(matches!(
+        s.unwrap().ground_source.unwrap().format,
+        RecordFormat::OneColumn { dt: 0.02, .. }
+    ));
+    // Explicit `format = "one-column"` reads the same.
+    let s = load_str(
+        &with_record("file = \"pulse.txt\"\nformat = \"one-column\"\ndt = 0.01"),
+        &[],
+    );
+    assert!(matches!(
+        s.unwrap().ground_source.unwrap().format,
+        RecordFormat::OneColumn { dt: 0.01, .. }
+    ));
+}
+
+#[test]
+fn an_explicit_two_column_format_with_dt_is_refused() {
+    let text = with_record("file = \"pulse_two_column.txt\"\nformat = \"two-column\"\ndt = 0.02");
+    let m = err_has(
+        load_str(&text, &[]),
+        &[
+            "test.toml",
+            "key `ground_motion.dt`",
+            "format \"two-column\"",
+            "time column",
+            "remove `dt`",
+        ],
+    );
+    assert!(!m.contains("ground_motion.file"), "{m}");
+}
+
+#[test]
+fn a_two_column_file_with_dt_and_no_format_is_refused_naming_the_line() {
+    // Line 1 of the fixture is a comment: the first line of numbers is line 2.
+    let text = with_record("file = \"pulse_two_column.txt\"\ndt = 0.02");
+    err_has(
+        load_str(&text, &[]),
+        &[
+            "test.toml",
+            "key `ground_motion.file`",
+            "pulse_two_column.txt line 2",
+            "found 2 values on this line",
+            "a two-column record",
+            "read it as two-column",
+            "remove dt",
+        ],
+    );
+}
+
+// ---------------------------------------------------------------------------------------
+// Contact sources: the `[[contacts]]` entry of every contact
+// ---------------------------------------------------------------------------------------
+
+#[test]
+fn the_aligned_paper_scene_maps_every_contact_to_entry_0() {
+    let s = structure::testing::paper_scene_aligned(&[]);
+    assert_eq!(s.contacts.len(), 15);
+    assert_eq!(s.contact_sources, vec![0; 15]);
+    assert!((0..15).all(|i| s.contact_source(i) == 0));
+    // A contact added in code after them is an entry of its own.
+    let mut t = s.clone();
+    let mut extra = t.contacts[0].clone();
+    extra.left_dof = 0;
+    extra.right_dof = 0;
+    t.contacts.push(extra);
+    assert_eq!(t.contact_source(15), 1);
+}
+
+#[test]
+fn contact_sources_follow_the_entries() {
+    // Entry 0: aligned (two contacts, roofs first); entry 1: floor 1 of `b` against a wall.
+    let text = TINY
+        .replace("left_floor = 2\n", "floors = \"aligned\"\n")
+        .replace("right_floor = 2\n", "")
+        .replace(
+            "[analysis]",
+            "[[contacts]]\nleft = \"b\"\nleft_floor = 1\nright = \"wall\"\ngap = 0.01\n\n\
+             [analysis]",
+        );
+    let s = load_str(&text, &[]).unwrap();
+    assert_eq!(s.contacts.len(), 3);
+    assert_eq!(s.contact_sources, vec![0, 0, 1]);
+    assert_eq!(
+        (0..3).map(|i| s.contact_source(i)).collect::<Vec<_>>(),
+        vec![0, 0, 1]
+    );
+    assert!(s.contacts[2].wall);
+    // Two plain entries: one contact each.
+    let two = TINY.replace(
+        "[analysis]",
+        "[[contacts]]\nleft = \"a\"\nleft_floor = 1\nright = \"b\"\nright_floor = 1\n\
+         gap = 0.02\n\n[analysis]",
+    );
+    let s = load_str(&two, &[]).unwrap();
+    assert_eq!(s.contact_sources, vec![0, 1]);
+    assert_eq!((s.contact_source(0), s.contact_source(1)), (0, 1));
+    assert_eq!(s.contacts[1].gap, 0.02);
+}
+
+#[test]
+fn a_scene_built_in_code_counts_contact_i_as_entry_i() {
+    let s = structure::testing::two_oscillators(1.0, 1.0, 1.0, 1.0, 1.0, 0.1, 1.0, 1.0);
+    assert!(s.contact_sources.is_empty());
+    assert_eq!(
+        (0..3).map(|i| s.contact_source(i)).collect::<Vec<_>>(),
+        vec![0, 1, 2]
+    );
+}
+
+// ---------------------------------------------------------------------------------------
+// Switching an aligned scene to a single roof contact with `--set` (docs/scenes.md)
+// ---------------------------------------------------------------------------------------
+
+#[test]
+fn an_aligned_entry_becomes_a_roof_contact_with_set() {
+    let s = structure::testing::paper_scene_aligned(&[
+        "contacts.0.floors=",
+        "contacts.0.left_floor=15",
+        "contacts.0.right_floor=15",
+    ]);
+    assert_eq!(s.contacts.len(), 1);
+    assert_eq!((s.contacts[0].left_dof, s.contacts[0].right_dof), (14, 14));
+    assert_eq!(s.contact_sources, vec![0]);
+    let roof = structure::testing::paper_scene(&[]);
+    assert_eq!(s.contacts, roof.contacts);
+    // Without removing `floors`, both ways of naming the floors are refused.
+    let o = ["contacts.0.left_floor=15".to_string()];
+    let path = paper_scene_path().with_file_name("scene-aligned.toml");
+    err_has(
+        Scene::from_file_with_overrides(&path, &o),
+        &["contacts[0].left_floor", "not both"],
+    );
+    // `--set` cannot add an array entry.
+    let o = ["contacts.1.gap=0.1".to_string()];
+    err_has(
+        Scene::from_file_with_overrides(&path, &o),
+        &[
+            "index 1 is out of range",
+            "`contacts` has 1 entry (index 0)",
         ],
     );
 }

@@ -69,7 +69,7 @@ enum Command {
         #[arg(long, default_value_t = 0.05, allow_negative_numbers = true)]
         damping: f64,
         /// Scale the record to this peak ground acceleration first (g).
-        #[arg(long, allow_negative_numbers = true)]
+        #[arg(long, allow_negative_numbers = true, value_parser = number_in_g)]
         pga: Option<f64>,
         /// Comma-separated periods (s); default: 100 log-spaced periods from 0.02 to 10 s.
         #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
@@ -89,7 +89,8 @@ enum Command {
         /// Override a scene value: PATH=VALUE on a dotted TOML path (repeatable).
         #[arg(long = "set", value_name = "PATH=VALUE")]
         set: Vec<String>,
-        /// Write the full result as JSON here (`-`: on stdout); otherwise a summary is printed.
+        /// Write the full result as JSON here; the summary is still printed, except with `-`
+        /// (the JSON on stdout instead) or a device or pipe (/dev/stdout, /dev/null, a FIFO).
         #[arg(long)]
         out: Option<PathBuf>,
         /// Write floor displacements and story shears over time as CSV here.
@@ -169,10 +170,12 @@ enum StudiesCommand {
         records: Vec<PathBuf>,
         /// Format of every --records file: at2, two-column (time, acceleration) or one-column
         /// (acceleration only; needs --record-dt). Default: at2 for *.at2 files, two-column
-        /// otherwise. Units need no option: every study scales each record to its PGA levels.
+        /// otherwise; one-column with --record-dt. Units need no option: every study scales
+        /// each record to its PGA levels.
         #[arg(long, value_enum, requires = "records")]
         record_format: Option<FormatArg>,
-        /// Time step of one-column --records (s).
+        /// Time step of one-column --records (s); without --record-format it means
+        /// one-column.
         #[arg(long, requires = "records", allow_negative_numbers = true)]
         record_dt: Option<f64>,
         /// Run one part of the sweep: cases with index % n == i - 1.
@@ -247,6 +250,13 @@ fn short(x: f64) -> String {
     }
 }
 
+/// The value of `pound spectrum --pga`: a plain number, in g (`0.3`, not `0.3g`).
+fn number_in_g(s: &str) -> Result<f64, String> {
+    s.trim()
+        .parse()
+        .map_err(|_| "expected a number in g, e.g. 0.3".to_string())
+}
+
 /// Smallest nonzero `pound spectrum --periods` value (s). Far below any record step the
 /// oscillator is rigid: its PSA is the PGA that period 0 gives (at 1e-6 s on Capitola 000,
 /// dt = 0.005 s, to 1.1e-7), so nothing is lost; and below about 5e-154 s the exact step's
@@ -273,13 +283,29 @@ fn gap_law_notes(scene: &structure::Scene) -> Vec<String> {
     let g = &scene.gap_element;
     let mut notes = Vec::new();
     if g.law == ContactLaw::Linear {
+        // One note per entry of the scene file's `contacts` (whose key it names), however
+        // many contacts it expands to (`floors = "aligned"`).
+        let mut noted = Vec::new();
         for (i, c) in scene.contacts.iter().enumerate() {
-            if c.restitution != 1.0 {
-                notes.push(format!(
-                    "contacts.{i}.restitution = {} is not used by the linear gap element (an elastic spring, no dashpot: c_r = 1); set gap_element.law = \"kelvin-voigt\" or \"hertz-damp\" for a damped impact",
-                    c.restitution
-                ));
+            let entry = scene.contact_source(i);
+            if c.restitution == 1.0 || noted.contains(&entry) {
+                continue;
             }
+            noted.push(entry);
+            let n = (0..scene.contacts.len())
+                .filter(|&k| scene.contact_source(k) == entry)
+                .count();
+            let expands = if n > 1 {
+                format!(" (for the {n} contacts this entry expands to)")
+            } else {
+                String::new()
+            };
+            notes.push(format!(
+                "contacts.{entry}.restitution = {}{expands} is not used by the linear gap element \
+                (an elastic spring, no dashpot: c_r = 1); set gap_element.law = \"kelvin-voigt\" \
+                or \"hertz-damp\" for a damped impact",
+                c.restitution
+            ));
         }
     }
     if g.tension && g.law != ContactLaw::KelvinVoigt {
@@ -318,33 +344,59 @@ fn input<E: std::fmt::Display>(e: E) -> anyhow::Error {
     anyhow::Error::new(InputError(e.to_string()))
 }
 
+/// Whether `path` is named like a PEER AT2 record (`*.at2`, any case).
+fn named_at2(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("at2"))
+}
+
 /// The scene overrides that read `studies run --records` files as `--record-format` and
 /// `--record-dt` say (none without them: the format follows each file's extension).
-fn record_overrides(format: Option<FormatArg>, dt: Option<f64>) -> Result<Vec<String>> {
+/// `--record-dt` alone means one-column, as `pound record FILE --dt S` does (refused when a
+/// file is named `*.at2`); with `--record-format at2` or `two-column` it is refused.
+fn record_overrides(
+    format: Option<FormatArg>,
+    dt: Option<f64>,
+    records: &[PathBuf],
+) -> Result<Vec<String>> {
     if let Some(dt) = dt {
         if !(dt.is_finite() && dt > 0.0) {
             return Err(input(format!(
                 "--record-dt {dt}: expected a time step > 0 (s)"
             )));
         }
-        if !matches!(format, Some(FormatArg::OneColumn)) {
-            return Err(input(format!(
-                "--record-dt {dt}: only a one-column record needs a time step (give --record-format one-column); AT2 records state theirs on line 4, two-column records take it from the time column"
-            )));
+        match format {
+            Some(f @ (FormatArg::At2 | FormatArg::TwoColumn)) => {
+                return Err(input(format!(
+                    "--record-dt {dt}: only a one-column record needs a time step, not \
+                    --record-format {} (AT2 records state theirs on line 4, two-column records \
+                    take it from the time column); remove --record-dt, or give --record-format \
+                    one-column",
+                    format_name(f)
+                )));
+            }
+            None => {
+                if let Some(r) = records.iter().find(|r| named_at2(r)) {
+                    return Err(input(format!(
+                        "--record-dt {dt}: {} is read as a PEER AT2 record, which states its time \
+                        step on line 4; remove --record-dt (or give --record-format one-column)",
+                        r.display()
+                    )));
+                }
+            }
+            Some(FormatArg::OneColumn) => {}
         }
     }
-    let name = match format {
-        None => return Ok(Vec::new()),
-        Some(FormatArg::At2) => "at2",
-        Some(FormatArg::TwoColumn) => "two-column",
-        Some(FormatArg::OneColumn) => {
-            if dt.is_none() {
-                return Err(input(
-                    "--record-format one-column: give the records' time step with --record-dt (s)",
-                ));
-            }
-            "one-column"
+    let name = match (format, dt) {
+        (None, None) => return Ok(Vec::new()),
+        (Some(FormatArg::OneColumn), None) => {
+            return Err(input(
+                "--record-format one-column: give the records' time step with --record-dt (s)",
+            ))
         }
+        (Some(f), _) => format_name(f),
+        // --record-dt alone: one-column.
+        (None, Some(_)) => format_name(FormatArg::OneColumn),
     };
     let mut set = vec![format!("ground_motion.format=\"{name}\"")];
     if let Some(dt) = dt {
@@ -353,13 +405,86 @@ fn record_overrides(format: Option<FormatArg>, dt: Option<f64>) -> Result<Vec<St
     Ok(set)
 }
 
+/// The scene's name of a record format.
+fn format_name(f: FormatArg) -> &'static str {
+    match f {
+        FormatArg::At2 => "at2",
+        FormatArg::TwoColumn => "two-column",
+        FormatArg::OneColumn => "one-column",
+    }
+}
+
+/// Reads every `studies run --records` file (units g: the studies scale each record to their
+/// PGA levels) in the format the cases will read it ([`record_overrides`], already checked),
+/// before anything runs, so that a record that cannot be read is refused up front, naming
+/// it, also with `--quick` (which runs the first record only). A file with one value per line
+/// read as two columns is told to give `--record-format one-column --record-dt S`.
+fn check_user_records(
+    records: &[PathBuf],
+    format: Option<FormatArg>,
+    dt: Option<f64>,
+) -> Result<()> {
+    for r in records {
+        let (read, how) = match (format, dt) {
+            (Some(FormatArg::At2), _) => (RecordFormat::At2, "as AT2 (--record-format at2)".into()),
+            (Some(FormatArg::TwoColumn), _) => (
+                RecordFormat::TwoColumn { units: Units::G },
+                "as two columns (--record-format two-column)".to_string(),
+            ),
+            (_, Some(dt)) => (
+                RecordFormat::OneColumn {
+                    dt,
+                    units: Units::G,
+                },
+                format!("as one column with --record-dt {dt}"),
+            ),
+            (_, None) if named_at2(r) => (
+                RecordFormat::At2,
+                "as AT2 (its name ends in .at2)".to_string(),
+            ),
+            (_, None) => (
+                RecordFormat::TwoColumn { units: Units::G },
+                "as two columns, time and acceleration (its name does not end in .at2 and no \
+                --record-format is given)"
+                    .to_string(),
+            ),
+        };
+        let Err(e) = GroundMotion::load(r, &read) else {
+            continue;
+        };
+        let one_column = matches!(read, RecordFormat::TwoColumn { .. })
+            && GroundMotion::load(
+                r,
+                &RecordFormat::OneColumn {
+                    dt: 1.0,
+                    units: Units::G,
+                },
+            )
+            .is_ok();
+        return Err(input(if one_column {
+            format!(
+                "--records: {} holds one value per line, a one-column record, but is read {how}: \
+                give --record-format one-column --record-dt S (S: its time step, s)",
+                r.display()
+            )
+        } else {
+            format!("--records: {} (read {how}): {e}", r.display())
+        }));
+    }
+    Ok(())
+}
+
+/// What [`implausible_pga`] asks to check of a record read with `pound record` or `spectrum`.
+const UNITS_FLAG: &str = "check the record's units (--units)";
+
 /// Warns (stderr) when a record's PGA is above [`PLAUSIBLE_PGA_G`]: almost surely read in the
-/// wrong units; `what` names the setting to check.
-fn implausible_pga(g: &GroundMotion, what: &str) {
+/// wrong units, or a scene's `pga` given in other units than g; `check` says what to check.
+fn implausible_pga(g: &GroundMotion, check: &str) {
     let pga = g.pga() / structure::G;
     if pga > PLAUSIBLE_PGA_G {
         eprintln!(
-            "warning: the ground motion's PGA is {} g, above {PLAUSIBLE_PGA_G} g, more than any recorded earthquake: check the record's units ({what})",
+            "warning: the ground motion's PGA is {} g, above {PLAUSIBLE_PGA_G} g, more than any \
+            recorded earthquake: {check}",
             if pga < 1e6 {
                 format!("{pga:.3}")
             } else {
@@ -446,6 +571,10 @@ fn run(cli: Cli) -> Result<()> {
                 Scene::from_file_for(&path, &set, structure::Purpose::Structure).map_err(input)?;
             // A building the eigen-solver cannot take is named with its scene file.
             let in_scene = |e: structure::ModelError| input(format!("{}: {e}", path.display()));
+            // Floors facing the other building mid-story: `pound run` warns about them too.
+            if let Some(w) = report::unmodelled_warning(&scene.unmodelled_facings(), json) {
+                eprintln!("warning: {w}");
+            }
             let text = if json {
                 let doc = report::modes_json(&scene).map_err(in_scene)?;
                 format!("{}\n", serde_json::to_string_pretty(&doc)?)
@@ -456,7 +585,7 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::Record { record, json } => {
             let gm = load_record(&record)?;
-            implausible_pga(&gm, "--units");
+            implausible_pga(&gm, UNITS_FLAG);
             let text = if json {
                 format!(
                     "{}\n",
@@ -481,7 +610,7 @@ fn run(cli: Cli) -> Result<()> {
             }
             let mut gm = load_record(&record)?;
             if pga.is_none() {
-                implausible_pga(&gm, "--units");
+                implausible_pga(&gm, UNITS_FLAG);
             }
             if let Some(p) = pga {
                 if !(p.is_finite() && p > 0.0) {
@@ -575,18 +704,41 @@ fn run(cli: Cli) -> Result<()> {
                 }
             }
             if let Some(g) = &scene.ground {
-                implausible_pga(g, "ground_motion.units and ground_motion.scale");
+                // A `pga` the scene gives is the PGA as run: the likely culprit itself.
+                let pga_given = scene.ground_source.as_ref().and_then(|s| s.pga_g);
+                match pga_given {
+                    Some(p) => implausible_pga(
+                        g,
+                        &format!(
+                            "check ground_motion.pga = {}: it is the PGA as run, in g (0.3 means \
+                            0.3 g), whatever the record's units",
+                            short(p)
+                        ),
+                    ),
+                    None => implausible_pga(
+                        g,
+                        "check the record's units (ground_motion.units and ground_motion.scale)",
+                    ),
+                }
             }
             if let (Method::Momentum, Some(n)) = (method, scene.momentum.modes) {
                 for b in scene.buildings.iter().filter(|b| b.n_floors() < n) {
                     eprintln!(
-                        "note: momentum.modes = {n} exceeds the {} modes of {}: all {} kept",
-                        b.n_floors(),
+                        "note: momentum.modes = {n} exceeds the {} of {}: all {} kept",
+                        studies::table::count(b.n_floors(), "mode", "modes"),
                         b.name,
                         b.n_floors()
                     );
                 }
             }
+            // The summary goes to stdout unless the JSON does: with `--out -`, or a device or
+            // pipe (`/dev/stdout`, `/dev/null`, a FIFO) that takes it in its place; with a file
+            // (`--out run.json`) it is printed too. Decided before the file is written.
+            let summary = match &out {
+                None => true,
+                Some(p) if p.as_os_str() == "-" => false,
+                Some(p) => matches!(io::destination(p), Ok(io::Destination::Replace(_))),
+            };
             let mut hist = history.as_ref().map(|_| History::default());
             let result = solvers::run(&scene, method, hist.as_mut())
                 .with_context(|| format!("{}: {method} analysis failed", path.display()))?;
@@ -639,7 +791,7 @@ fn run(cli: Cli) -> Result<()> {
             }
             if let Some(s) = stdout_json {
                 print_out(&s)?;
-            } else if out.is_none() {
+            } else if summary {
                 print_out(&report::run_summary(
                     &scene,
                     &result,
@@ -772,7 +924,8 @@ fn studies_command(command: StudiesCommand) -> Result<()> {
                 }
                 recs.push(std::path::absolute(r)?.display().to_string());
             }
-            let record_set = record_overrides(record_format, record_dt)?;
+            let record_set = record_overrides(record_format, record_dt, &records)?;
+            check_user_records(&records, record_format, record_dt)?;
             if !studies_dir.is_dir() {
                 return Err(input(format!(
                     "--studies-dir {}: not a folder (expected the folder holding the study definitions, <name>.toml; the default is ./studies, so run from the repository's root or give --studies-dir DIR)",
@@ -807,6 +960,9 @@ fn studies_command(command: StudiesCommand) -> Result<()> {
                 .iter()
                 .map(|n| st::prepare_study(n, &cfg).map_err(|e| bad(n, e)))
                 .collect::<Result<Vec<_>>>()?;
+            for w in prepared.iter().flat_map(|p| p.notes()) {
+                eprintln!("note: {w}");
+            }
             for (n, p) in names.iter().zip(prepared) {
                 let r = st::run_prepared(p, &cfg).map_err(|e| bad(n, e))?;
                 // Failures the study exists to show (e.g. chattering without the persistent
@@ -817,9 +973,9 @@ fn studies_command(command: StudiesCommand) -> Result<()> {
                     (f, _) => format!("{f} failed"),
                 };
                 eprintln!(
-                    "{:<12} {} cases: {} run ({failed}), {} cached, {} in other shards; {:.1} s{}",
+                    "{:<12} {}: {} run ({failed}), {} cached, {} in other shards; {:.1} s{}",
                     r.name,
-                    r.summary.total,
+                    studies::table::count(r.summary.total, "case", "cases"),
                     r.summary.ran,
                     r.summary.skipped,
                     r.summary.other_shards,
@@ -899,6 +1055,9 @@ fn studies_command(command: StudiesCommand) -> Result<()> {
                 | studies::sweep::StudyError::NoManifests { .. } => input(e),
                 e => anyhow::Error::new(e),
             })?;
+            for w in &merged.notes {
+                eprintln!("note: {w}");
+            }
             for d in &merged.damaged {
                 let what = if d.replaced {
                     "replaced by"

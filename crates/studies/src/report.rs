@@ -1,7 +1,10 @@
 //! Human-readable tables for the command line.
 
 use solvers::RunOutput;
+use structure::scene::UnmodelledFacing;
 use structure::{GroundMotion, Modes, Scene};
+
+use crate::table::count;
 
 /// The modes of every building, in scene order: solved once each, for the building's rows
 /// and for every contact that touches it (an aligned pair of 1000-story buildings has 1000
@@ -19,22 +22,24 @@ pub fn modes_table(scene: &Scene) -> Result<String, structure::ModelError> {
         let t = m.periods();
         let e = m.effective_mass_ratios();
         s.push_str(&format!(
-            "{} ({} floors, total mass {:.4e} kg)\n",
+            "{} ({}, total mass {:.4e} kg)\n",
             b.name,
-            b.n_floors(),
+            count(b.n_floors(), "floor", "floors"),
             b.total_mass()
         ));
-        s.push_str("  mode   f (Hz)   paper (Hz)   diff (%)   T (s)    eff. mass   cumul.\n");
+        // The reference frequencies are the scene's `reference_frequencies_hz` (for the
+        // paper scene, the paper's).
+        s.push_str("  mode   f (Hz) reference (Hz)  diff (%)    T (s)  eff. mass   cumul.\n");
         let mut cum = 0.0;
         for i in 0..m.n_modes() {
             cum += e[i];
             let (p, d) = match b.reference_frequencies_hz.get(i) {
                 Some(r) => (
-                    format!("{r:10.3}"),
+                    format!("{r:14.3}"),
                     // Rounded to the digits shown first, so round-off prints +0.0000, not -0.0000.
                     format!("{:+9.4}", (1e6 * (f[i] - r) / r).round() / 1e4 + 0.0),
                 ),
-                None => (format!("{:>10}", "-"), format!("{:>9}", "")),
+                None => (format!("{:>14}", "-"), format!("{:>9}", "")),
             };
             s.push_str(&format!(
                 "  {:4} {:8.4} {} {} {:8.4} {:10.4} {:8.4}\n",
@@ -119,7 +124,12 @@ pub fn modes_json(scene: &Scene) -> Result<serde_json::Value, structure::ModelEr
             "r_n_left": rl, "r_n_right": rr,
         }));
     }
-    Ok(serde_json::json!({ "scene": scene.name, "buildings": buildings, "contacts": contacts }))
+    Ok(serde_json::json!({
+        "scene": scene.name,
+        "buildings": buildings,
+        "contacts": contacts,
+        "unmodelled": scene.unmodelled_facings(),
+    }))
 }
 
 /// Peak ground velocity and displacement alongside the basic record facts.
@@ -212,11 +222,134 @@ pub fn run_json(
     v
 }
 
+/// Most entries of the scene file's `contacts` that [`run_header`] lists one a line.
+const CONTACT_ENTRIES_LISTED: usize = 5;
+
+/// The head of the `pound run` summary: the record as run (file name, PGA, the duration
+/// analysed) and the contacts as resolved, one line per entry of the scene file's `contacts`
+/// (an entry with `floors = "aligned"` is one line with its count of floor pairs).
+pub fn run_header(scene: &Scene) -> String {
+    let mut s = String::new();
+    match (&scene.ground, &scene.ground_source) {
+        (Some(g), Some(src)) => {
+            let name = src.file.file_name().map_or_else(
+                || src.file.display().to_string(),
+                |n| n.to_string_lossy().into_owned(),
+            );
+            let of = if (scene.duration - g.duration()).abs() > 1e-9 * g.duration().max(1.0) {
+                format!(" (the record: {:.2} s)", g.duration())
+            } else {
+                String::new()
+            };
+            s.push_str(&format!(
+                "record: {name}, PGA {:.3} g as run, duration {:.2} s{of}\n",
+                g.pga() / structure::G,
+                scene.duration
+            ));
+        }
+        _ => s.push_str(&format!(
+            "record: none (free vibration), duration {:.2} s\n",
+            scene.duration
+        )),
+    }
+    // The contacts of each entry, in order of first appearance.
+    let mut entries: Vec<(usize, Vec<usize>)> = Vec::new();
+    for i in 0..scene.contacts.len() {
+        let e = scene.contact_source(i);
+        match entries.iter_mut().find(|(k, _)| *k == e) {
+            Some((_, v)) => v.push(i),
+            None => entries.push((e, vec![i])),
+        }
+    }
+    let lines: Vec<String> = entries
+        .iter()
+        .map(|(_, group)| contact_entry_line(scene, group))
+        .collect();
+    match lines.len() {
+        0 => s.push_str("contacts: none\n"),
+        1 => s.push_str(&format!("contacts: {}\n", lines[0])),
+        n => {
+            s.push_str(&format!(
+                "contacts: {} in {n} scene entries\n",
+                scene.contacts.len()
+            ));
+            for l in lines.iter().take(CONTACT_ENTRIES_LISTED) {
+                s.push_str(&format!("  {l}\n"));
+            }
+            if n > CONTACT_ENTRIES_LISTED {
+                s.push_str(&format!(
+                    "  … {} more (every contact in `resolved_scene` of --out)\n",
+                    count(n - CONTACT_ENTRIES_LISTED, "entry", "entries")
+                ));
+            }
+        }
+    }
+    s
+}
+
+/// One entry of the scene file's `contacts` as resolved: its floor pair, or its count of
+/// floor pairs, the gap and c_r (`contacts`: the indices of its contacts, at least one).
+fn contact_entry_line(scene: &Scene, contacts: &[usize]) -> String {
+    let cs: Vec<&structure::Contact> = contacts.iter().map(|&i| &scene.contacts[i]).collect();
+    let c = cs[0];
+    let left = &scene.buildings[c.left].name;
+    let right = |c: &structure::Contact| {
+        if c.wall {
+            "the wall".to_string()
+        } else {
+            format!(
+                "{} floor {}",
+                scene.buildings[c.right].name,
+                c.right_dof + 1
+            )
+        }
+    };
+    let range = |v: Vec<f64>, unit: &str| {
+        let (lo, hi) = v
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+                (a.min(x), b.max(x))
+            });
+        if lo == hi {
+            format!("{lo}{unit}")
+        } else {
+            format!("{lo} … {hi}{unit}")
+        }
+    };
+    let gap = range(cs.iter().map(|c| c.gap).collect(), " m");
+    let cr = range(cs.iter().map(|c| c.restitution).collect(), "");
+    let pairs = if let [only] = cs[..] {
+        format!("{left} floor {} – {}", only.left_dof + 1, right(only))
+    } else {
+        let last = cs[cs.len() - 1];
+        if c.wall {
+            format!(
+                "{left} floors {} … {} – the wall ({} contacts)",
+                c.left_dof + 1,
+                last.left_dof + 1,
+                cs.len()
+            )
+        } else {
+            format!(
+                "{left} – {} at {} floor pairs ({}–{} … {}–{})",
+                scene.buildings[c.right].name,
+                cs.len(),
+                c.left_dof + 1,
+                c.right_dof + 1,
+                last.left_dof + 1,
+                last.right_dof + 1
+            )
+        }
+    };
+    format!("{pairs}, gap {gap}, c_r {cr}")
+}
+
 pub fn run_summary(scene: &Scene, run: &RunOutput, amplification: Option<&[Vec<f64>]>) -> String {
-    let mut s = format!(
+    let mut s = run_header(scene);
+    s.push_str(&format!(
         "{} — method {} ({})\n",
         scene.name, run.method, run.settings
-    );
+    ));
     for (bi, b) in run.buildings.iter().enumerate() {
         let amp = amplification.and_then(|a| a.get(bi));
         let mu = b.ductility.as_deref();
@@ -294,17 +427,17 @@ pub fn run_summary(scene: &Scene, run: &RunOutput, amplification: Option<&[Vec<f
     ));
     let st = &run.stats;
     s.push_str(&format!(
-        "stats: {} steps ({} rejected), {} events, {} impacts, {}{} root iterations, {:.3} ms\n",
-        st.steps,
+        "stats: {} ({} rejected), {}, {}, {}{}, {:.3} ms\n",
+        count(st.steps, "step", "steps"),
         st.rejected_steps,
-        st.events,
-        st.impacts,
+        count(st.events, "event", "events"),
+        count(st.impacts, "impact", "impacts"),
         if st.story_kinks > 0 {
-            format!("{} story kinks, ", st.story_kinks)
+            format!("{}, ", count(st.story_kinks, "story kink", "story kinks"))
         } else {
             String::new()
         },
-        st.root_iterations,
+        count(st.root_iterations, "root iteration", "root iterations"),
         st.wall_seconds * 1e3
     ));
     s
@@ -317,9 +450,10 @@ pub fn overlap_lines(run: &RunOutput) -> String {
     let mut s = String::new();
     if !run.overlaps.is_empty() {
         s.push_str(&format!(
-            "overlaps (facing floors without a contact; max of u_left − u_right − gap, m): {} pairs, {} beyond the gap
+            "overlaps (facing floors without a contact; max of u_left − u_right − gap, m): {}, {} \
+            beyond the gap
 ",
-            run.overlaps.len(),
+            count(run.overlaps.len(), "pair", "pairs"),
             run.overlaps.iter().filter(|o| o.max_overlap > 0.0).count()
         ));
         for o in &run.overlaps {
@@ -352,11 +486,52 @@ pub fn overlap_warnings(run: &RunOutput) -> Vec<String> {
     }
     if !run.unmodelled.is_empty() {
         w.push(format!(
-            "{} floor(s) face an adjacent building mid-story (floor-to-column impact, not modelled); see `unmodelled`",
-            run.unmodelled.len()
+            "{}; see `unmodelled`",
+            unmodelled_facing(run.unmodelled.len())
         ));
     }
     w
+}
+
+/// The start of the warning about floors that face an adjacent building mid-story.
+fn unmodelled_facing(n: usize) -> String {
+    format!(
+        "{n} floor(s) face an adjacent building mid-story (floor-to-column impact, not modelled)"
+    )
+}
+
+/// Most floor-to-column facings [`unmodelled_warning`] names.
+const FACINGS_NAMED: usize = 3;
+
+/// The `pound modes` warning (stderr) about floors that face an adjacent building mid-story
+/// (the scene gives `story_height` on both and their floors are at other elevations), which
+/// `pound run` warns about too: the first three named, and where the rest are
+/// (`json`: the `unmodelled` key of the output; else `pound modes --json`). `None` without.
+pub fn unmodelled_warning(facings: &[UnmodelledFacing], json: bool) -> Option<String> {
+    if facings.is_empty() {
+        return None;
+    }
+    let named: Vec<String> = facings
+        .iter()
+        .take(FACINGS_NAMED)
+        .map(|f| {
+            format!(
+                "floor {} of {} ({:.3} m) between levels {} and {} of {}",
+                f.floor, f.building, f.elevation, f.between[0], f.between[1], f.other
+            )
+        })
+        .collect();
+    let rest = facings.len().saturating_sub(FACINGS_NAMED);
+    let more = match (rest, json) {
+        (0, _) => String::new(),
+        (n, true) => format!("; {n} more in `unmodelled`"),
+        (n, false) => format!("; {n} more (all in `unmodelled` of `pound modes --json`)"),
+    };
+    Some(format!(
+        "{}: {}{more}",
+        unmodelled_facing(facings.len()),
+        named.join("; ")
+    ))
 }
 
 /// The scene as it was run, after `--set` overrides and defaults, in the scene-file format

@@ -848,7 +848,12 @@ pub fn run_cases(specs: &[CaseSpec], opts: &EngineOptions) -> Result<RunSummary>
         Some(n) => rayon::ThreadPoolBuilder::new()
             .num_threads(n.max(1))
             .build()
-            .map_err(|e| StudyError::Other(format!("cannot start {n} threads: {e}")))?
+            .map_err(|e| {
+                StudyError::Other(format!(
+                    "cannot start {}: {e}",
+                    crate::table::count(n, "thread", "threads")
+                ))
+            })?
             .install(work),
         None => work(),
     };

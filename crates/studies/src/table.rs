@@ -114,3 +114,6 @@ pub fn e(v: Option<f64>, digits: usize) -> String {
         _ => "–".into(),
     }
 }
+
+/// A count with its noun, singular for 1 (`1 record`, `0 records`, `4 records`).
+pub use structure::count;

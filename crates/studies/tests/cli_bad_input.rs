@@ -694,7 +694,7 @@ fn scene_array_lengths_that_disagree() {
     scene_case(
         &text,
         &[],
-        &["buildings[0].story_stiffness", "1 values", "expected 2"],
+        &["buildings[0].story_stiffness", "has 1 value,", "expected 2"],
     );
     let text = edit(
         &base,
@@ -1385,7 +1385,7 @@ fn scene_bad_set_expressions() {
             &[
                 "--set contacts.5.gap=0.05",
                 "index 5 is out of range",
-                "1 entries",
+                "1 entry (index 0)",
             ],
         ),
         (

@@ -519,3 +519,121 @@ fn a_record_step_long_against_the_shortest_period_is_split() {
         "{split}"
     );
 }
+
+/// Two buildings whose floors stand at other elevations (`story_height` 3.5 m and 3.0 m):
+/// the floors that face the other building mid-story. Free vibration, for `pound run` too.
+const MID_STORY: &str = r#"
+[[buildings]]
+name = "low"
+stories = 4
+mass = 1.0e5
+story_stiffness = 2.0e8
+story_height = 3.5
+initial_velocity = [0.1, 0.2, 0.3, 0.4]
+
+[[buildings]]
+name = "tall"
+stories = 6
+mass = 1.0e5
+story_stiffness = 2.0e8
+story_height = 3.0
+
+[[contacts]]
+left = "low"
+left_floor = 4
+right = "tall"
+right_floor = 4
+gap = 0.01
+
+[analysis]
+duration = 1.0
+"#;
+
+/// `pound modes` warns (stderr) about floors that face the other building mid-story, as
+/// `pound run` does, naming the first ones; `--json` lists them all under `unmodelled`, as
+/// `pound run --out` does. Without story heights: no warning and an empty list.
+#[test]
+fn modes_warns_about_floors_facing_mid_story() {
+    let d = TempDir::new("modes-facing");
+    let f = d.write("mid.toml", MID_STORY);
+    let f = f.to_str().unwrap();
+    let o = pound(&["modes", f]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    let run_json = d.path("run.json");
+    let r = pound(&[
+        "run",
+        f,
+        "--method",
+        "gap",
+        "--no-baseline",
+        "--out",
+        run_json.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        r.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&r.stderr)
+    );
+    let run: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&run_json).unwrap()).unwrap();
+    let n = run["unmodelled"].as_array().unwrap().len();
+    assert!(n > 3, "{n} facings");
+    let head = format!(
+        "warning: {n} floor(s) face an adjacent building mid-story (floor-to-column impact, not \
+        modelled)"
+    );
+    assert!(err.contains(&head), "{err}");
+    assert!(
+        String::from_utf8_lossy(&r.stderr).contains(&head),
+        "the same warning from `pound run`"
+    );
+    assert!(
+        err.contains("floor 1 of low (3.500 m) between levels 1 and 2 of tall"),
+        "{err}"
+    );
+    assert!(
+        err.contains(&format!(
+            "{} more (all in `unmodelled` of `pound modes --json`)",
+            n - 3
+        )),
+        "{err}"
+    );
+    let o = pound(&["modes", f, "--json"]);
+    assert_eq!(o.status.code(), Some(0));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["unmodelled"], run["unmodelled"]);
+    let more = format!("{} more in `unmodelled`", n - 3);
+    assert!(String::from_utf8_lossy(&o.stderr).contains(&more));
+    // Without story heights every floor faces a floor.
+    let plain = d.write(
+        "plain.toml",
+        &MID_STORY.replace("story_height", "# story_height"),
+    );
+    let o = pound(&["modes", plain.to_str().unwrap(), "--json"]);
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("warning"));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["unmodelled"], serde_json::json!([]));
+}
+
+/// The `pound modes` column of the scene's `reference_frequencies_hz` is headed "reference
+/// (Hz)" (any scene may give them, not only the paper's), and a one-floor building is "1
+/// floor".
+#[test]
+fn modes_reference_column_and_singular_floor() {
+    let o = pound(&["modes", &scene()]);
+    let table = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        table.contains("  mode   f (Hz) reference (Hz)  diff (%)    T (s)  eff. mass   cumul.\n"),
+        "{table}"
+    );
+    assert!(!table.contains("paper"), "{table}");
+    let d = TempDir::new("modes-one-floor");
+    let f = d.write(
+        "one.toml",
+        "[[buildings]]\nname = \"a\"\nmasses = [1e5]\nstory_stiffness = [1e8]\n",
+    );
+    let o = pound(&["modes", f.to_str().unwrap()]);
+    assert!(String::from_utf8_lossy(&o.stdout).starts_with("a (1 floor, total mass"));
+}

@@ -341,6 +341,32 @@ fn gap_settings_the_linear_law_ignores_are_noted() {
     );
     let kv = run("kelvin-voigt");
     assert!(!kv.contains("note:"), "{kv}");
+    // A `floors = "aligned"` entry expands to 15 contacts: one note, naming the entry's key
+    // (`contacts.0`; the expanded contacts' indices are no keys of the file).
+    let aligned = scene().replace("scene.toml", "scene-aligned.toml");
+    let o = pound(&[
+        "run",
+        &aligned,
+        "--method",
+        "gap",
+        "--no-baseline",
+        "--set",
+        "analysis.duration=1",
+        "--set",
+        "gap_element.law=linear",
+        "--set",
+        "contacts.0.restitution=0.5",
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    assert_eq!(err.matches("note:").count(), 1, "{err}");
+    assert!(
+        err.contains(
+            "note: contacts.0.restitution = 0.5 (for the 15 contacts this entry expands to)"
+        ),
+        "{err}"
+    );
+    assert!(!err.contains("contacts.1."), "{err}");
 }
 
 /// `--out -` prints the JSON on stdout (and nothing else there), for a pipe.
@@ -376,6 +402,118 @@ fn implausible_pga_is_warned_about() {
     );
     let normal = run_momentum(&scene(), "1", &[]);
     assert!(!String::from_utf8_lossy(&normal.stderr).contains("PGA is"));
+    // A `pga` the scene gives (here 300, meant as 0.3 g or as 300 cm/s²) is the PGA as run:
+    // the warning names it, not the record's units, which it overrides.
+    let o = run_momentum(&scene(), "1", &["--set", "ground_motion.pga=300"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    assert!(
+        err.contains("PGA is 300.000 g")
+            && err.contains("check ground_motion.pga = 300: it is the PGA as run, in g"),
+        "{err}"
+    );
+    assert!(!err.contains("ground_motion.units"), "{err}");
+}
+
+/// `pound spectrum --pga` takes a number in g: `0.3g` is refused saying so (exit 2).
+#[test]
+fn spectrum_pga_with_a_unit_is_refused_saying_what_is_expected() {
+    let rec = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../data/ground-motions/RSN752_LOMAP_CAP000.AT2"
+    );
+    let o = pound(&["spectrum", rec, "--pga", "0.3g"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--pga")
+            && err.contains("0.3g")
+            && err.contains("expected a number in g, e.g. 0.3"),
+        "{err}"
+    );
+    assert!(!err.contains("invalid float literal"), "{err}");
+    assert!(o.stdout.is_empty());
+    let o = pound(&["spectrum", rec, "--pga", "0.3", "--periods", "1"]);
+    assert_eq!(o.status.code(), Some(0));
+}
+
+/// The `pound run` summary starts with the record as run (file name, PGA, duration) and the
+/// contacts as resolved; an aligned entry is one line with its count of floor pairs. With
+/// `--out FILE` (a file) the summary is printed too; with `--out -` stdout holds the JSON
+/// alone, and with a device (`/dev/null`) nothing is printed, as before.
+#[test]
+fn run_summary_heads_with_record_and_contacts_and_comes_with_out_file() {
+    let d = TempDir::new("summary-head");
+    let out = d.path("run.json");
+    let o = run_momentum(&scene(), "2", &["--out", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0));
+    let text = String::from_utf8_lossy(&o.stdout);
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next(),
+        Some(
+            "record: RSN752_LOMAP_CAP000.AT2, PGA 0.400 g as run, duration 2.00 s (the record: \
+        39.95 s)"
+        ),
+        "{text}"
+    );
+    assert_eq!(
+        lines.next(),
+        Some("contacts: building1 floor 15 – building2 floor 15, gap 0.1 m, c_r 1"),
+        "{text}"
+    );
+    assert!(text.contains("paper-pair — method momentum"), "{text}");
+    assert!(text.contains("energy (J):"), "{text}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    assert!(v["buildings"].is_array());
+    // Aligned: one line for the entry.
+    let aligned = scene().replace("scene.toml", "scene-aligned.toml");
+    let o = run_momentum(&aligned, "2", &[]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.contains(
+            "\ncontacts: building1 – building2 at 15 floor pairs (15–15 … 1–1), gap 0.1 m, c_r 1\n"
+        ),
+        "{text}"
+    );
+    // `--out -`: the JSON alone; a device: nothing on stdout.
+    let o = run_momentum(&scene(), "2", &["--out", "-"]);
+    let _: serde_json::Value = serde_json::from_slice(&o.stdout).expect("stdout is the JSON");
+    let o = run_momentum(&scene(), "2", &["--out", "/dev/null"]);
+    assert_eq!(o.status.code(), Some(0));
+    assert!(o.stdout.is_empty());
+}
+
+/// The summary's header gives an aligned contact entry as one line with its floor pairs.
+/// (The solver's settings line keeps "1 event-check windows per step" for a soft pair: it is
+/// the `settings` column of every committed `cases.csv`, which a wording change would move.)
+#[test]
+fn aligned_contacts_are_one_line_of_the_summary() {
+    let d = TempDir::new("one-window");
+    let rec = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../data/ground-motions/RSN767_LOMAP_G03000.AT2"
+    );
+    let sc = d.write(
+        "soft.toml",
+        &format!(
+            "[[buildings]]\nname = \"a\"\nstories = 6\nmass = 5.0e5\nstory_stiffness = 9.4e8\n\
+             damping_ratio = 0.05\n[[buildings]]\nname = \"b\"\nstories = 10\nmass = 5.0e5\n\
+             story_stiffness = 8.8e8\ndamping_ratio = 0.05\n[[contacts]]\nleft = \"a\"\n\
+             right = \"b\"\nfloors = \"aligned\"\ngap = 0.04\n[ground_motion]\nfile = {rec:?}\n\
+             pga = 0.3\n"
+        ),
+    );
+    let o = run_momentum(sc.to_str().unwrap(), "1", &[]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(text.contains("contacts: a – b at 6 floor pairs"), "{text}");
 }
 
 const FREE_SCENE: &str = r#"

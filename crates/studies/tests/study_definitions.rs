@@ -405,3 +405,125 @@ fn a_bad_later_definition_stops_the_command_before_any_study_runs() {
     let written = files_under(&out);
     assert!(written.is_empty(), "nothing written: {written:?}");
 }
+
+/// The studies' own list of those that take `record_table` is the studies whose committed
+/// definitions give it, so that the note about a missing default table is said for exactly
+/// those.
+#[test]
+fn the_studies_with_a_record_table_are_listed() {
+    for name in NAMES.iter().chain(&EXTRA) {
+        let text = std::fs::read_to_string(root().join(format!("studies/{name}.toml"))).unwrap();
+        let def: toml::Table = toml::from_str(&text).unwrap();
+        assert_eq!(
+            def.contains_key("record_table"),
+            studies::studies::RECORD_TABLE_STUDIES.contains(name),
+            "{name}"
+        );
+    }
+}
+
+/// A definition without `record_table` reads the default table,
+/// `../data/ground-motions/records.csv` relative to the studies folder, when it exists (a
+/// near-field pulse record is classified as one); when it does not (a studies folder of the
+/// user's own, outside the repository) the study runs with every record unclassified and one
+/// note on stderr, instead of failing on a table the file never named. A `record_table`
+/// that is named and cannot be read is still refused (`cli_bad_input.rs`).
+#[test]
+fn a_study_without_record_table_classifies_nothing_without_the_default_table() {
+    let d = TempDir::new("no-record-table");
+    let dir = d.path("studies");
+    copy_studies(&root().join("studies"), &dir);
+    let def: String = std::fs::read_to_string(dir.join("gap.toml"))
+        .unwrap()
+        .lines()
+        .filter(|l| !l.starts_with("record_table"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    std::fs::write(dir.join("gap.toml"), def).unwrap();
+    let pulse = root().join("data/ground-motions/near-field/RSN181_IMPVALL-H-E06_233.AT2");
+    let run = |out: &Path| {
+        let o = pound(&[
+            "studies",
+            "run",
+            "gap",
+            "--quick",
+            "--studies-dir",
+            dir.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--records",
+            pulse.to_str().unwrap(),
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr).into_owned();
+        assert!(o.status.success(), "{err}");
+        let summary = std::fs::read_to_string(out.join("gap/summary.md")).unwrap();
+        (err, summary)
+    };
+    let (err, summary) = run(&d.path("out1"));
+    assert_eq!(err.matches("note:").count(), 1, "{err}");
+    assert!(
+        err.contains("gap.toml has no `record_table`")
+            && err.contains("../data/ground-motions/records.csv")
+            && err.contains("every record is unclassified"),
+        "{err}"
+    );
+    assert!(summary.contains("1 record (1 unclassified)"), "{summary}");
+    // The default table beside the studies folder: read, and no note.
+    let table = d.path("data/ground-motions/records.csv");
+    std::fs::create_dir_all(table.parent().unwrap()).unwrap();
+    std::fs::copy(root().join("data/ground-motions/records.csv"), &table).unwrap();
+    let (err, summary) = run(&d.path("out2"));
+    assert!(!err.contains("note:"), "{err}");
+    assert!(summary.contains("1 record (1 pulse)"), "{summary}");
+}
+
+/// The gap study compares 5 and 10 cm gaps (`gap_5_vs_10.md`): with a grid that lacks
+/// either, the file and the summary say in one line that it was not computed and why,
+/// instead of a table of n = 0 and dashes; with both in the grid the table is written.
+#[test]
+fn gap_5_vs_10_says_why_when_the_grid_lacks_the_gaps() {
+    let d = TempDir::new("gap-5-10");
+    let dir = d.path("studies");
+    copy_studies(&root().join("studies"), &dir);
+    let def = std::fs::read_to_string(dir.join("gap.toml")).unwrap();
+    // --quick: 6 gaps from 0 to gap_max.
+    for (gap_max, computed) in [("0.20", false), ("0.25", true)] {
+        let text: String = def
+            .lines()
+            .map(|l| {
+                if l.starts_with("gap_max") {
+                    format!("gap_max = {gap_max}\n")
+                } else {
+                    format!("{l}\n")
+                }
+            })
+            .collect();
+        std::fs::write(dir.join("gap.toml"), text).unwrap();
+        let out = d.path(&format!("out-{gap_max}"));
+        let o = common::quick_run("gap", dir.to_str().unwrap(), out.to_str().unwrap());
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let md = std::fs::read_to_string(out.join("gap/gap_5_vs_10.md")).unwrap();
+        let summary = std::fs::read_to_string(out.join("gap/summary.md")).unwrap();
+        let why =
+            "not computed: the gap grid (0, 4, 8, 12, 16, 20 cm) has no 5 cm and 10 cm values";
+        if computed {
+            assert!(
+                md.contains("| amplification, building 2 contact story |"),
+                "{md}"
+            );
+            assert!(!summary.contains("not computed"), "{summary}");
+        } else {
+            assert_eq!(md.lines().count(), 1, "{md}");
+            assert!(md.contains(why), "{md}");
+            assert!(!md.contains('–'), "{md}");
+            assert!(
+                summary.contains(&format!("(`gap_5_vs_10.md`): {why}")),
+                "{summary}"
+            );
+            assert!(
+                !summary.contains("| amplification, building 2"),
+                "{summary}"
+            );
+        }
+    }
+}

@@ -293,22 +293,57 @@ fn record_format_of_user_records() {
     // The options are kept in the manifest, so a merge rebuilds the same case list.
     let manifest = std::fs::read_to_string(out1.join("modes/manifest.json")).unwrap();
     assert!(manifest.contains("one-column"), "{manifest}");
+    // `--record-dt` alone means one-column (as `pound record FILE --dt S`): the same cases,
+    // ids included, as with `--record-format one-column`.
+    let (o3, out3) = run("dt-alone", &one, &["--record-dt", "0.01"]);
+    assert!(
+        o3.status.success(),
+        "{}",
+        String::from_utf8_lossy(&o3.stderr)
+    );
+    let table = |out: &std::path::Path| std::fs::read_to_string(out.join("modes/peaks.csv"));
+    assert_eq!(table(&out3).unwrap(), table(&out1).unwrap());
 
     for (rec, extra, expect) in [
+        // A one-column file without the options: the message names the file and the
+        // options to give (not a scene key).
         (
             &one,
             &[][..],
-            &["one.txt line 1", "expected 2 values per line"][..],
+            &[
+                "--records: ",
+                "one.txt holds one value per line",
+                "give --record-format one-column --record-dt S",
+            ][..],
+        ),
+        (
+            &one,
+            &["--record-format", "two-column"][..],
+            &[
+                "one.txt holds one value per line",
+                "--record-format one-column",
+            ][..],
         ),
         (
             &one,
             &["--record-format", "one-column"][..],
             &["--record-dt"][..],
         ),
+        // `--record-dt` alone reads two columns as one: refused, naming the file.
         (
             &two,
             &["--record-dt", "0.01"][..],
-            &["--record-dt 0.01", "one-column"][..],
+            &["two.dat", "--record-dt 0.01", "one column"][..],
+        ),
+        (
+            &two,
+            &["--record-format", "two-column", "--record-dt", "0.01"][..],
+            &["--record-dt 0.01", "not --record-format two-column"][..],
+        ),
+        (
+            &two,
+            &["--record-format", "at2", "--record-dt", "0.01"][..],
+            &["--record-dt 0.01", "not --record-format at2"][..],
         ),
         (
             &one,
@@ -322,12 +357,81 @@ fn record_format_of_user_records() {
         for e in expect {
             assert!(err.contains(e), "{extra:?}: {e:?} not in {err}");
         }
+        assert!(
+            !err.contains("ground_motion"),
+            "{extra:?}: a --records file is not blamed on a scene key: {err}"
+        );
         assert!(!out.exists(), "{extra:?}: nothing written");
     }
     // Without --records the record options are a usage error.
     let o = pound(&["studies", "run", "modes", "--record-format", "at2"]);
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("--records"));
+}
+
+/// Every `--records` file is read before anything runs, also with `--quick` (whose cases use
+/// the first record only): a one-column file given second without `--record-format` is
+/// refused up front, naming it (exit 2, nothing written), as it is given first; an AT2 file
+/// whose header is broken, likewise.
+#[test]
+fn every_user_record_is_read_before_the_sweep() {
+    let d = TempDir::new("recs-all-read");
+    let (mut one, mut two) = (String::new(), String::new());
+    for i in 0..1400 {
+        let t = i as f64 * 0.01;
+        let a = 0.3 * (2.0 * std::f64::consts::PI * 1.5 * t).sin();
+        one.push_str(&format!("{a:.6}\n"));
+        two.push_str(&format!("{t:.2} {a:.6}\n"));
+    }
+    let one = d.write("one.txt", &one);
+    let two = d.write("two.txt", &two);
+    let bad_at2 = d.write("broken.AT2", "PEER\nno header\n");
+    let studies = studies_dir();
+    for (k, recs, named) in [
+        (0, [&two, &one], "one.txt"),
+        (1, [&one, &two], "one.txt"),
+        (2, [&two, &bad_at2], "broken.AT2"),
+    ] {
+        let out = d.path(&format!("out{k}"));
+        let o = pound(&[
+            "studies",
+            "run",
+            "gap",
+            "--quick",
+            "--studies-dir",
+            &studies,
+            "--out",
+            out.to_str().unwrap(),
+            "--records",
+            recs[0].to_str().unwrap(),
+            recs[1].to_str().unwrap(),
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{recs:?}: {err}");
+        assert!(
+            err.contains("--records: ") && err.contains(named),
+            "{recs:?}: {err}"
+        );
+        assert!(!out.exists(), "{recs:?}: nothing written");
+        assert!(o.stdout.is_empty());
+    }
+    // Both readable: the sweep runs (on the first only, --quick).
+    let other = d.write("other.txt", &std::fs::read_to_string(&two).unwrap());
+    let out = d.path("ok");
+    let o = pound(&[
+        "studies",
+        "run",
+        "gap",
+        "--quick",
+        "--studies-dir",
+        &studies,
+        "--out",
+        out.to_str().unwrap(),
+        "--records",
+        two.to_str().unwrap(),
+        other.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
 
 /// Runs `pound studies run <study> --quick` on the repository's definition with the line

@@ -127,17 +127,36 @@ pub enum RecordError {
         expected: String,
         found: String,
     },
-    /// `column` is the 1-based character column where the offending token starts.
-    #[error("{origin} line {line}, column {column}: expected {expected}, found {found:?}")]
+    /// `column` is the 1-based character column where the offending token starts. `header`:
+    /// the line is the file's first data line (of a two- or one-column record) and starts
+    /// with a word, as a header line would: the message then says how to keep it.
+    #[error(
+        "{origin} line {line}, column {column}: expected {expected}, found {found:?}{}",
+        if *.header { HEADER_HINT } else { "" }
+    )]
     Value {
         origin: String,
         line: usize,
         column: usize,
         expected: String,
         found: String,
+        header: bool,
+    },
+    /// A file read as one-column (a time step given) whose every data line holds two
+    /// numbers, the first rising by a constant `step` like times: a two-column record.
+    /// `line` is its first data line.
+    #[error("{origin} line {line}: {}", two_columns_as_one(*.step))]
+    TwoColumnsAsOne {
+        origin: String,
+        line: usize,
+        step: f64,
     },
     /// The number of values declared in the header (at `line`) differs from the number present.
-    #[error("{origin} line {line}: the header declares NPTS = {declared} values, but the file holds {found} (expected exactly {declared})")]
+    #[error(
+        "{origin} line {line}: the header declares NPTS = {declared}, but the file holds {} \
+         (expected exactly {declared})",
+        crate::count(*.found, "value", "values")
+    )]
     Count {
         origin: String,
         line: usize,
@@ -199,6 +218,19 @@ pub enum RecordError {
     },
 }
 
+/// The end of a [`RecordError::Value`] message on a header-like first data line.
+const HEADER_HINT: &str = "; a header line is not read: remove it or start it with `#` (a comment)";
+
+/// [`RecordError::TwoColumnsAsOne`] after its file and line.
+fn two_columns_as_one(step: f64) -> String {
+    format!(
+        "expected one-column values (the record is read as one-column because a time step was \
+         given), found 2 values on this line and on every line of numbers, the first rising by \
+         {step} like times (s): a two-column record (time, acceleration); read it as two-column \
+         (format two-column) and remove dt, which it takes from its time column"
+    )
+}
+
 /// An I/O error in words: "is a directory" rather than the OS's wording for it.
 pub fn io_reason(e: &std::io::Error) -> String {
     match e.kind() {
@@ -237,10 +269,17 @@ const AT2_UNITS: &str = "the acceleration units on line 3, e.g. \"ACCELERATION T
 fn refuse_two_columns(text: &str, origin: &str) -> Result<(), RecordError> {
     let mut firsts = Vec::new();
     let mut first_line = 0;
+    let mut data_lines = 0;
     for (i, raw) in text.lines().enumerate() {
         let l = raw.split('#').next().unwrap_or("");
         let toks = tokens(l, true);
         if toks.is_empty() {
+            continue;
+        }
+        data_lines += 1;
+        // A header line (the first data line, starting with a word) does not hide the two
+        // columns below it: they are what to report first.
+        if data_lines == 1 && parse_number(toks[0].text).is_none() {
             continue;
         }
         if toks.len() != 2 {
@@ -263,14 +302,10 @@ fn refuse_two_columns(text: &str, origin: &str) -> Result<(), RecordError> {
             .windows(2)
             .all(|w| ((w[1] - w[0]) - step).abs() <= 1e-6 * step.abs());
     if uniform {
-        return Err(RecordError::Header {
+        return Err(RecordError::TwoColumnsAsOne {
             origin: origin.to_string(),
             line: first_line,
-            expected: "one-column values (a one-column record was asked for, with a time step)"
-                .into(),
-            found: format!(
-                "two columns on every line, the first rising by {step} like times: a two-column record; read it with format two-column (no dt)"
-            ),
+            step,
         });
     }
     Ok(())
@@ -471,13 +506,44 @@ fn value(tok: &Token<'_>, origin: &str, line: usize, expected: &str) -> Result<f
             line,
             found: clip(tok.text),
         }),
-        None => Err(RecordError::Value {
-            origin: origin.to_string(),
-            line,
-            column: tok.column(),
-            expected: expected.to_string(),
-            found: clip(tok.text),
-        }),
+        None => Err(not_a_number(tok, origin, line, expected, false)),
+    }
+}
+
+/// The [`RecordError::Value`] of a token that is not a number; `header`: it starts the file's
+/// first data line, where a word is taken for a header line.
+fn not_a_number(
+    tok: &Token<'_>,
+    origin: &str,
+    line: usize,
+    expected: &str,
+    header: bool,
+) -> RecordError {
+    RecordError::Value {
+        origin: origin.to_string(),
+        line,
+        column: tok.column(),
+        expected: expected.to_string(),
+        found: clip(tok.text),
+        header,
+    }
+}
+
+/// A header line: the first data line of a two- or one-column record (`first`) starting
+/// with a token that is not a number (a word such as `time_s`), refused with a message that
+/// says how to keep it.
+fn refuse_header(
+    toks: &[Token<'_>],
+    first: bool,
+    origin: &str,
+    line: usize,
+    expected: &str,
+) -> Result<(), RecordError> {
+    match toks.first() {
+        Some(t) if first && parse_number(t.text).is_none() => {
+            Err(not_a_number(t, origin, line, expected, true))
+        }
+        _ => Ok(()),
     }
 }
 
@@ -718,8 +784,10 @@ impl GroundMotion {
                 any |= !raw.trim().is_empty();
                 continue;
             }
-            any = true;
             let toks = tokens(l, true);
+            // `times` is empty on the first data line (every data line before it adds one).
+            refuse_header(&toks, times.is_empty(), origin, ln, "a number (time in s)")?;
+            any = true;
             if toks.len() != 2 {
                 let (column, found) = match toks.get(2) {
                     Some(t) => (t.column(), l.trim().to_string()),
@@ -729,6 +797,7 @@ impl GroundMotion {
                     origin: origin.to_string(),
                     line: ln,
                     column,
+                    header: false,
                     expected: if toks.len() == 1 {
                         format!(
                             "2 values per line (time in s, acceleration in {units}); one value per line is a one-column record: give its format (one-column) and its dt"
@@ -842,7 +911,10 @@ impl GroundMotion {
             let ln = i + 1;
             let l = raw.split('#').next().unwrap_or("");
             any |= !raw.trim().is_empty();
-            for tok in tokens(l, true) {
+            let toks = tokens(l, true);
+            // `accel` is empty up to the first data line.
+            refuse_header(&toks, accel.is_empty(), origin, ln, &expected)?;
+            for tok in toks {
                 accel.push(si(value(&tok, origin, ln, &expected)?, units, origin, ln)?);
                 last_line = ln;
             }

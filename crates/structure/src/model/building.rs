@@ -124,8 +124,8 @@ impl Building {
         }
         if self.story_stiffness.len() != n {
             return Err(bad(format!(
-                "`story_stiffness` has {} values but `masses` has {n}: one story per floor",
-                self.story_stiffness.len()
+                "`story_stiffness` has {} but `masses` has {n}: one story per floor",
+                crate::count(self.story_stiffness.len(), "value", "values")
             )));
         }
         for (key, v) in [
@@ -148,8 +148,8 @@ impl Building {
         ] {
             if v.len() != n {
                 return Err(bad(format!(
-                    "`{key}` has {} values, expected {n} (one per floor)",
-                    v.len()
+                    "`{key}` has {}, expected {n} (one per floor)",
+                    crate::count(v.len(), "value", "values")
                 )));
             }
             if let Some((i, x)) = v.iter().enumerate().find(|(_, x)| !x.is_finite()) {
@@ -174,8 +174,8 @@ impl Building {
         if let super::StoryLaw::Bilinear { yield_shear, .. } = &self.story_law {
             if yield_shear.len() != n {
                 return Err(bad(format!(
-                    "`yield_shear` has {} values, expected {n} (one per story, story 1 first)",
-                    yield_shear.len()
+                    "`yield_shear` has {}, expected {n} (one per story, story 1 first)",
+                    crate::count(yield_shear.len(), "value", "values")
                 )));
             }
         }

@@ -272,8 +272,10 @@ impl Study for Cost {
         );
         let mut cpu = Table::new(
             &format!(
-                "Accuracy against wall time: fastest, median and slowest of {} runs (machine-dependent; each timed case runs alone, after the untimed ones, so the spread is the machine's own noise)",
-                d.repeat
+                "Accuracy against wall time: fastest, median and slowest of {} (machine-dependent; \
+                each timed case runs alone, after the untimed ones, so the spread is the machine's \
+                own noise)",
+                crate::table::count(d.repeat, "run", "runs")
             ),
             &[
                 "setting",
@@ -505,8 +507,11 @@ impl Study for Cost {
                 }),
             ],
             &format!(
-                "(a) Vertical line: the reference (rigid impact, momentum method, all modes) at its fastest time. Bars: fastest to slowest of {} runs. (b) Spring error: k integrated at tol {:.0e}, against rigid impact; integration error: against that.",
-                d.repeat, d.reference_tolerance
+                "(a) Vertical line: the reference (rigid impact, momentum method, all modes) at \
+                its fastest time. Bars: fastest to slowest of {}. (b) Spring error: k integrated \
+                at tol {:.0e}, against rigid impact; integration error: against that.",
+                crate::table::count(d.repeat, "run", "runs"),
+                d.reference_tolerance
             ),
         )?;
         det.write(&ctx.dir, "cost")?;

@@ -17,9 +17,8 @@ use solvers::Method;
 use super::record_table::PulseClass;
 use super::stats::{median_band, Spread};
 use super::{
-    amp_contact, contact_floor_displacement, default_pga, default_record_table, failures_note,
-    record_classes, record_name, require_count, require_pga, study_records, write_summary, Ctx,
-    Study, MAX_GRID,
+    amp_contact, contact_floor_displacement, default_pga, failures_note, record_classes,
+    record_name, require_count, require_pga, study_records, write_summary, Ctx, Study, MAX_GRID,
 };
 use crate::plot::{figure, Marker, Panel, PanelKind, Series};
 use crate::sweep::{CaseSpec, Result, Results, StudyError};
@@ -41,10 +40,11 @@ struct Def {
     /// Folders whose every `*.AT2` is added (sorted by file name); default none.
     #[serde(default)]
     record_dirs: Vec<String>,
-    /// Record metadata (pulse classes), relative to `studies/` (default
-    /// `../data/ground-motions/records.csv`).
-    #[serde(default = "default_record_table")]
-    record_table: String,
+    /// Record metadata (pulse classes), relative to `studies/`; without it
+    /// `../data/ground-motions/records.csv` if that exists, else every record unclassified
+    /// ([`super::record_classes`]).
+    #[serde(default)]
+    record_table: Option<String>,
     /// Largest gap of the grid, m: finite, > 0 (the grid runs from 0 to it).
     gap_max: f64,
     /// Gaps in the grid (evenly spaced, 0 … `gap_max`): 2 ..= [`MAX_GRID`] (1000).
@@ -63,6 +63,19 @@ fn gaps(ctx: &Ctx, d: &Def) -> Vec<f64> {
             (g * 1e6).round() / 1e6
         })
         .collect()
+}
+
+/// The gap grid in words, cm: every gap when there are few, else the first ones and the last.
+fn grid_words(gs: &[f64]) -> String {
+    let cm: Vec<String> = gs
+        .iter()
+        .map(|g| crate::table::trimmed(g * 100.0, 2))
+        .collect();
+    if cm.len() <= 6 {
+        format!("{} cm", cm.join(", "))
+    } else {
+        format!("{}, {}, {} … {} cm", cm[0], cm[1], cm[2], cm[cm.len() - 1])
+    }
 }
 
 fn mom(ctx: &Ctx, d: &Def, rec: &str, gap: f64) -> CaseSpec {
@@ -111,7 +124,7 @@ impl Study for Gap {
         })?;
         let mut v = Vec::new();
         let recs = study_records(ctx, d.records.as_deref(), &d.record_dirs)?;
-        record_classes(ctx, &d.record_table, &recs)?;
+        record_classes(ctx, d.record_table.as_deref(), &recs)?;
         for rec in recs {
             for g in gaps(ctx, &d) {
                 v.push(mom(ctx, &d, &rec, g));
@@ -125,7 +138,7 @@ impl Study for Gap {
         let d: Def = ctx.def()?;
         let gs = gaps(ctx, &d);
         let recs = study_records(ctx, d.records.as_deref(), &d.record_dirs)?;
-        let classes = record_classes(ctx, &d.record_table, &recs)?;
+        let classes = record_classes(ctx, d.record_table.as_deref(), &recs)?;
         let scene = CaseSpec::new(&d.scene, Method::Momentum)
             .load_scene(&ctx.studies_dir)
             .map_err(StudyError::Other)?;
@@ -154,11 +167,27 @@ impl Study for Gap {
             ],
         );
         let mut summary = Table::new(
-            &format!("Contact-story amplification against gap size (c_r = 1), {} records: median and 16th–84th percentiles over the n records that pound with each method; {kname}", recs.len()),
+            &format!(
+                "Contact-story amplification against gap size (c_r = 1), {}: median and \
+            16th–84th percentiles over the n records that pound with each method; {kname}",
+                crate::table::count(recs.len(), "record", "records")
+            ),
             &[
-                "gap (cm)", "momentum n", "momentum b1 median", "momentum b1 p16", "momentum b1 p84", "momentum b2 median",
-                "momentum b2 p16", "momentum b2 p84", "gap element n", "gap element b1 median", "gap element b1 p16",
-                "gap element b1 p84", "gap element b2 median", "gap element b2 p16", "gap element b2 p84",
+                "gap (cm)",
+                "momentum n",
+                "momentum b1 median",
+                "momentum b1 p16",
+                "momentum b1 p84",
+                "momentum b2 median",
+                "momentum b2 p16",
+                "momentum b2 p84",
+                "gap element n",
+                "gap element b1 median",
+                "gap element b1 p16",
+                "gap element b1 p84",
+                "gap element b2 median",
+                "gap element b2 p16",
+                "gap element b2 p84",
             ],
         );
         let mut pulse = Table::new(
@@ -444,8 +473,9 @@ impl Study for Gap {
         let mut reading = Vec::new();
         let gmax = gs.last().copied().unwrap_or(0.0);
         reading.push(format!(
-            "{} records ({}), gaps 0 to {:.1} cm. The exact no-contact separation (peak of u1 − u2) has median {} cm and reaches {:.1} cm; {}",
-            recs.len(),
+            "{} ({}), gaps 0 to {:.1} cm. The exact no-contact separation (peak of u1 − u2) has \
+            median {} cm and reaches {:.1} cm; {}",
+            crate::table::count(recs.len(), "record", "records"),
             groups
                 .iter()
                 .skip(1)
@@ -584,7 +614,33 @@ impl Study for Gap {
                 r.iter().filter(|x| **x > 1.0).count().to_string(),
             ]);
         }
-        claims.write(&ctx.dir, "gap_5_vs_10")?;
+        // Without a 5 cm or a 10 cm gap in the grid there is nothing to compare: one line
+        // saying so instead of a table of n = 0 (the CSV keeps its header, without rows).
+        let missing: Vec<&str> = [(0.05, "5 cm"), (0.10, "10 cm")]
+            .into_iter()
+            .filter(|(g, _)| at(*g).is_none())
+            .map(|(_, name)| name)
+            .collect();
+        let not_computed = (!missing.is_empty()).then(|| {
+            format!(
+                "not computed: the gap grid ({}) has no {} value{}",
+                grid_words(&gs),
+                missing.join(" and "),
+                if missing.len() > 1 { "s" } else { "" }
+            )
+        });
+        if let Some(why) = &not_computed {
+            let header: Vec<&str> = claims.header.iter().map(String::as_str).collect();
+            let csv = Table::new(&claims.title, &header).csv()?;
+            crate::io::write_atomic(&ctx.dir.join("gap_5_vs_10.csv"), &csv)?;
+            crate::io::write_atomic(
+                &ctx.dir.join("gap_5_vs_10.md"),
+                format!("5 cm against 10 cm gap: {why}.\n").as_bytes(),
+            )?;
+            reading.push(format!("5 cm against 10 cm (`gap_5_vs_10.md`): {why}."));
+        } else {
+            claims.write(&ctx.dir, "gap_5_vs_10")?;
+        }
         if !ratios[0].is_empty() {
             reading.push(format!(
                 "5 cm against 10 cm (`gap_5_vs_10.md`, {} records that pound at both): the amplification ratio is {} (the paper: 1.42 for building 2's top story) and above 1 for {} records; the median approach speed ratio is {} (above 1 for {}), the largest approach speed ratio {} (above 1 for {}).",
@@ -604,7 +660,11 @@ impl Study for Gap {
             ctx,
             "Study 5: gap size and separation rules",
             &reading,
-            &[&sep_sum, &summary, &claims],
+            &if not_computed.is_some() {
+                vec![&sep_sum, &summary]
+            } else {
+                vec![&sep_sum, &summary, &claims]
+            },
             &[(
                 "gap",
                 "Contact-story amplification against the gap, pulse vs no pulse, and the separation rules",

@@ -546,12 +546,19 @@ pub struct PreparedStudy {
     specs: Vec<CaseSpec>,
     /// Time the preparation took, s (counted in the study's wall time).
     seconds: f64,
+    notes: Vec<String>,
 }
 
 impl PreparedStudy {
     /// Cases of the study (with their baselines).
     pub fn cases(&self) -> usize {
         self.specs.len()
+    }
+
+    /// What to say on stderr about the definition before the study runs
+    /// ([`definition_notes`]).
+    pub fn notes(&self) -> &[String] {
+        &self.notes
     }
 }
 
@@ -571,6 +578,7 @@ pub fn prepare_study(name: &str, cfg: &RunConfig) -> Result<PreparedStudy> {
     let (text, file) = read_definition(cfg, name)?;
     let ctx = make_ctx(name, &text, &file, cfg, &cfg.opts)?;
     let specs = all_cases(st, &ctx)?;
+    let notes = definition_notes(&ctx);
     Ok(PreparedStudy {
         name: name.into(),
         st,
@@ -578,6 +586,7 @@ pub fn prepare_study(name: &str, cfg: &RunConfig) -> Result<PreparedStudy> {
         ctx,
         specs,
         seconds: t0.elapsed().as_secs_f64(),
+        notes,
     })
 }
 
@@ -597,6 +606,7 @@ pub fn run_prepared(p: PreparedStudy, cfg: &RunConfig) -> Result<StudyRun> {
         ctx,
         specs,
         seconds,
+        notes: _,
     } = p;
     write_json(
         &ctx.dir.join("manifest.json"),
@@ -714,6 +724,8 @@ pub struct Merged {
     /// of the same case: for each such case the first damaged copy (the copies after the one
     /// used are not read).
     pub damaged: Vec<Damaged>,
+    /// What to say on stderr about the definitions ([`definition_notes`]).
+    pub notes: Vec<String>,
 }
 
 /// A damaged case file that [`merge`] passed over.
@@ -741,6 +753,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path, studies_dir: &Path) -> Result<Merged>
     // missing or damaged case of any study stops the merge before anything is written.
     let mut plans = Vec::new();
     let mut damaged_files = Vec::new();
+    let mut notes = Vec::new();
     for &name in NAMES.iter().chain(&EXTRA) {
         let manifests: Vec<PathBuf> = dirs
             .iter()
@@ -776,6 +789,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path, studies_dir: &Path) -> Result<Merged>
             &m.options,
         )?;
         let specs = all_cases(st, &ctx)?;
+        notes.extend(definition_notes(&ctx));
         // Every case's file: the output's own, else the first shard's that has it, the first
         // of these that parses (read and parsed now, before anything is copied or written).
         // A case with no file is missing; one whose every file is damaged stops the merge,
@@ -873,6 +887,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path, studies_dir: &Path) -> Result<Merged>
         studies: merged,
         unexpected,
         damaged: damaged_files,
+        notes,
     })
 }
 
@@ -1061,10 +1076,41 @@ pub fn failures_note(res: &Results) -> Option<String> {
     ))
 }
 
-/// The deserialisation default of a study's `record_table` key: the record metadata table,
-/// relative to `studies/`.
-pub fn default_record_table() -> String {
-    "../data/ground-motions/records.csv".into()
+/// The record metadata table a study reads when its definition has no `record_table` key,
+/// relative to the studies folder (the repository's `data/ground-motions/records.csv` from
+/// `studies/`); when it does not exist there, every record is unclassified
+/// ([`record_classes`]).
+pub const DEFAULT_RECORD_TABLE: &str = "../data/ground-motions/records.csv";
+
+/// The studies whose definitions take a `record_table` key (record pulse classes).
+pub const RECORD_TABLE_STUDIES: [&str; 6] = [
+    "stiffness",
+    "modes",
+    "restitution",
+    "gap",
+    "yielding",
+    "yielding-strong",
+];
+
+/// What a study prints on stderr about its definition before it runs (`note: …`): a study
+/// of [`RECORD_TABLE_STUDIES`] without a `record_table` key whose default table
+/// ([`DEFAULT_RECORD_TABLE`]) does not exist beside the studies folder classifies no record.
+pub fn definition_notes(ctx: &Ctx) -> Vec<String> {
+    let mut notes = Vec::new();
+    if RECORD_TABLE_STUDIES.contains(&ctx.name.as_str())
+        && !ctx.def.contains_key("record_table")
+        && !ctx.studies_dir.join(DEFAULT_RECORD_TABLE).exists()
+    {
+        notes.push(format!(
+            "study `{}`: {} has no `record_table` and its default, `{DEFAULT_RECORD_TABLE}` \
+            relative to the studies folder ({}), does not exist: every record is unclassified (no \
+            pulse / no-pulse split); set `record_table` to a table to classify them",
+            ctx.name,
+            ctx.def_file,
+            ctx.studies_dir.join(DEFAULT_RECORD_TABLE).display()
+        ));
+    }
+    notes
 }
 
 /// The records of a record-based study: `--records` if given; else `records` (default: the
@@ -1112,12 +1158,19 @@ pub fn study_records(
 
 /// The pulse class of each record, from the metadata table at `table` (relative to
 /// `studies/`; see [`record_table`]). The studies call it when they build their cases too,
-/// so a bad table is refused before anything runs.
+/// so a bad table is refused before anything runs. A table the definition names must be
+/// readable; without one ([`None`]) the default ([`DEFAULT_RECORD_TABLE`]) is read if it
+/// exists, else every record is unclassified ([`definition_notes`] says so).
 pub fn record_classes(
     ctx: &Ctx,
-    table: &str,
+    table: Option<&str>,
     recs: &[String],
 ) -> Result<Vec<record_table::PulseClass>> {
+    let table = match table {
+        Some(t) => t,
+        None if ctx.studies_dir.join(DEFAULT_RECORD_TABLE).exists() => DEFAULT_RECORD_TABLE,
+        None => return Ok(vec![record_table::PulseClass::Unclassified; recs.len()]),
+    };
     let full = ctx.studies_dir.join(table);
     let t = record_table::RecordTable::load(&full).map_err(|e| match e {
         // The definition names a table that cannot be read: bad input (exit 2).

@@ -11,8 +11,8 @@ use solvers::Method;
 use super::record_table::PulseClass;
 use super::stats::{median_band, Spread};
 use super::{
-    amp_contact, default_pga, default_record_table, failures_note, is_restitution, record_classes,
-    record_name, require_count, require_pga, study_records, write_summary, Ctx, Study, MAX_MODES,
+    amp_contact, default_pga, failures_note, is_restitution, record_classes, record_name,
+    require_count, require_pga, study_records, write_summary, Ctx, Study, MAX_MODES,
 };
 use crate::plot::{figure, Marker, Panel, PanelKind, Series};
 use crate::sweep::{CaseSpec, Result, Results};
@@ -34,10 +34,11 @@ struct Def {
     /// Folders whose every `*.AT2` is added (sorted by file name); default none.
     #[serde(default)]
     record_dirs: Vec<String>,
-    /// Record metadata (pulse classes), relative to `studies/` (default
-    /// `../data/ground-motions/records.csv`).
-    #[serde(default = "default_record_table")]
-    record_table: String,
+    /// Record metadata (pulse classes), relative to `studies/`; without it
+    /// `../data/ground-motions/records.csv` if that exists, else every record unclassified
+    /// ([`super::record_classes`]).
+    #[serde(default)]
+    record_table: Option<String>,
     /// Gap of contact 0, m: finite, >= 0.
     gap: f64,
     /// Coefficient of restitution of contact 0: in [0, 1].
@@ -98,7 +99,7 @@ impl Study for Modes {
         })?;
         let mut v = Vec::new();
         let recs = study_records(ctx, d.records.as_deref(), &d.record_dirs)?;
-        record_classes(ctx, &d.record_table, &recs)?;
+        record_classes(ctx, d.record_table.as_deref(), &recs)?;
         for rec in recs {
             for var in &d.variants {
                 for n in modes(ctx, &d) {
@@ -112,18 +113,32 @@ impl Study for Modes {
     fn report(&self, ctx: &Ctx, res: &Results) -> Result<()> {
         let d: Def = ctx.def()?;
         let recs = study_records(ctx, d.records.as_deref(), &d.record_dirs)?;
-        let classes = record_classes(ctx, &d.record_table, &recs)?;
+        let classes = record_classes(ctx, d.record_table.as_deref(), &recs)?;
         let ns = modes(ctx, &d);
         let mut t = Table::new(
             &format!(
-                "Momentum method against modes kept (gap {} cm, c_r = {}), {} records: median and 16th–84th percentiles over the n records that pound; achieved c_r minimum over every impact of every record",
+                "Momentum method against modes kept (gap {} cm, c_r = {}), {}: median and \
+                16th–84th percentiles over the n records that pound; achieved c_r minimum over \
+                every impact of every record",
                 d.gap * 100.0,
                 d.restitution,
-                recs.len()
+                crate::table::count(recs.len(), "record", "records")
             ),
             &[
-                "impulse", "modes", "r_N b1", "r_N b2", "n", "amp. b1 median", "amp. b1 p16", "amp. b1 p84",
-                "amp. b2 median", "amp. b2 p16", "amp. b2 p84", "impacts median", "achieved c_r median", "achieved c_r min",
+                "impulse",
+                "modes",
+                "r_N b1",
+                "r_N b2",
+                "n",
+                "amp. b1 median",
+                "amp. b1 p16",
+                "amp. b1 p84",
+                "amp. b2 median",
+                "amp. b2 p16",
+                "amp. b2 p84",
+                "impacts median",
+                "achieved c_r median",
+                "achieved c_r min",
             ],
         );
         let mut by_class = Table::new(

@@ -118,8 +118,10 @@ fn validate(ctx: &Ctx, d: &Def) -> Result<()> {
             let n = floors.get(b).copied().unwrap_or(0);
             require(ctx, v.len() == n, || {
                 format!(
-                    "`reference[{i}].{key}` has {} values: expected {n} values (one per floor of building {} of `{}`, top floor first)",
-                    v.len(),
+                    "`reference[{i}].{key}` has {}: expected {} (one per floor of building {} of \
+                    `{}`, top floor first)",
+                    crate::table::count(v.len(), "value", "values"),
+                    crate::table::count(n, "value", "values"),
                     b + 1,
                     d.scene
                 )

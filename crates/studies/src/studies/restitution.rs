@@ -10,8 +10,8 @@ use solvers::Method;
 
 use super::stats::{median_band, Spread};
 use super::{
-    amp_contact, default_pga, default_record_table, failures_note, record_classes, require_pga,
-    study_records, write_summary, Ctx, Study,
+    amp_contact, default_pga, failures_note, record_classes, require_pga, study_records,
+    write_summary, Ctx, Study,
 };
 use crate::plot::{figure, Panel, PanelKind, Series};
 use crate::sweep::{CaseSpec, Result, Results};
@@ -33,10 +33,11 @@ struct Def {
     /// Folders whose every `*.AT2` is added (sorted by file name); default none.
     #[serde(default)]
     record_dirs: Vec<String>,
-    /// Record metadata (pulse classes), relative to `studies/` (default
-    /// `../data/ground-motions/records.csv`).
-    #[serde(default = "default_record_table")]
-    record_table: String,
+    /// Record metadata (pulse classes), relative to `studies/`; without it
+    /// `../data/ground-motions/records.csv` if that exists, else every record unclassified
+    /// ([`super::record_classes`]).
+    #[serde(default)]
+    record_table: Option<String>,
     /// Gap of contact 0, m: finite, >= 0.
     gap: f64,
     /// Coefficients of restitution c_r of the sweep: at least one, each in [0, 1].
@@ -101,7 +102,7 @@ impl Study for Restitution {
         })?;
         let mut v = Vec::new();
         let recs = study_records(ctx, d.records.as_deref(), &d.record_dirs)?;
-        record_classes(ctx, &d.record_table, &recs)?;
+        record_classes(ctx, d.record_table.as_deref(), &recs)?;
         for rec in recs {
             for cr in crs(ctx, &d) {
                 v.extend(methods(ctx, &d, &rec, cr).into_iter().map(|m| m.1));
@@ -113,7 +114,7 @@ impl Study for Restitution {
     fn report(&self, ctx: &Ctx, res: &Results) -> Result<()> {
         let d: Def = ctx.def()?;
         let recs = study_records(ctx, d.records.as_deref(), &d.record_dirs)?;
-        let classes = record_classes(ctx, &d.record_table, &recs)?;
+        let classes = record_classes(ctx, d.record_table.as_deref(), &recs)?;
         let cs = crs(ctx, &d);
         let labels: Vec<String> = methods(ctx, &d, &recs[0], 1.0)
             .into_iter()
@@ -121,13 +122,25 @@ impl Study for Restitution {
             .collect();
         let mut t = Table::new(
             &format!(
-                "Contact-story amplification against c_r (gap {} cm), {} records: median and 16th–84th percentiles over the n records that pound",
+                "Contact-story amplification against c_r (gap {} cm), {}: median and 16th–84th \
+                percentiles over the n records that pound",
                 d.gap * 100.0,
-                recs.len()
+                crate::table::count(recs.len(), "record", "records")
             ),
             &[
-                "c_r", "method", "n", "amp. b1 median", "amp. b1 p16", "amp. b1 p84", "amp. b2 median", "amp. b2 p16",
-                "amp. b2 p84", "impacts median", "achieved c_r median", "persistent-contact phases median", "failed",
+                "c_r",
+                "method",
+                "n",
+                "amp. b1 median",
+                "amp. b1 p16",
+                "amp. b1 p84",
+                "amp. b2 median",
+                "amp. b2 p16",
+                "amp. b2 p84",
+                "impacts median",
+                "achieved c_r median",
+                "persistent-contact phases median",
+                "failed",
             ],
         );
         let panel = |title: &str, x: &str, y: &str| Panel {

@@ -155,8 +155,8 @@ impl Study for Robustness {
         let (gaps, crs) = grid(ctx, &d);
         let mut t = Table::new(
             &format!(
-                "Robustness over {} records (paper scene, PGA {} g): counts per method, c_r and gap",
-                recs.len(),
+                "Robustness over {} (paper scene, PGA {} g): counts per method, c_r and gap",
+                crate::table::count(recs.len(), "record", "records"),
                 d.pga
             ),
             &[
@@ -246,8 +246,16 @@ impl Study for Robustness {
         fails.write(&ctx.dir, "failures")?;
         let reading = vec![
             format!(
-                "{} runs ({} records × {} gaps × {} values of c_r × {} solvers; every record scaled to {} g): {} failed, {} impacts with a non-positive approach speed, {} achieved restitutions outside [0, 1]; {} contact entries have a null restitution with its reason (touching or grazing contacts, chattering captures, ground-driven gap-element episodes).",
-                totals[0], recs.len(), gaps.len(), crs.len(), METHODS.len(), d.pga, totals[1], totals[2], totals[3], totals[4]
+                "{} ({} × {} × {} of c_r × {}; every record scaled to {} g): {} failed, {} impacts \
+                with a non-positive approach speed, {} achieved restitutions outside [0, 1]; {} \
+                contact entries have a null restitution with its reason (touching or grazing \
+                contacts, chattering captures, ground-driven gap-element episodes).",
+                crate::table::count(totals[0], "run", "runs"),
+                crate::table::count(recs.len(), "record", "records"),
+                crate::table::count(gaps.len(), "gap", "gaps"),
+                crate::table::count(crs.len(), "value", "values"),
+                crate::table::count(METHODS.len(), "solver", "solvers"),
+                d.pga, totals[1], totals[2], totals[3], totals[4]
             ),
             format!(
                 "Largest energy-balance error relative to the input energy: {max_err:.1e}. Wall time of all runs: {wall_all:.1} s summed over cases (cases run in parallel; times vary by tens of per cent between runs on a shared machine)."

@@ -366,9 +366,14 @@ impl Study for Stability {
             let on = res.get(&chatter(ctx, &d, *cr, true));
             let off = res.get(&chatter(ctx, &d, *cr, false));
             reading.push(format!(
-                "At c_r = {cr} the run with the persistent-contact phase finishes ({} impacts, {} phases); without it the run ends as {}.",
-                on.ok().map_or(0, |o| o.impacts),
-                on.ok().map_or(0, |o| o.persistent_contacts),
+                "At c_r = {cr} the run with the persistent-contact phase finishes ({}, {}); \
+                without it the run ends as {}.",
+                crate::table::count(on.ok().map_or(0, |o| o.impacts), "impact", "impacts"),
+                crate::table::count(
+                    on.ok().map_or(0, |o| o.persistent_contacts),
+                    "phase",
+                    "phases"
+                ),
                 off.error_kind.clone().unwrap_or_else(|| "ok".into())
             ));
         }

@@ -19,9 +19,8 @@ use solvers::Method;
 use super::record_table::PulseClass;
 use super::stats::{loglog_slope, median_band, Spread};
 use super::{
-    amp_contact, default_pga, default_record_table, failures_note, is_restitution, logspace,
-    record_classes, record_name, require_count, require_pga, shear_error, study_records,
-    write_summary, Ctx, Study, MAX_GRID,
+    amp_contact, default_pga, failures_note, is_restitution, logspace, record_classes, record_name,
+    require_count, require_pga, shear_error, study_records, write_summary, Ctx, Study, MAX_GRID,
 };
 use crate::plot::{figure, Panel, PanelKind, Series};
 use crate::sweep::{CaseSpec, Result, Results};
@@ -43,10 +42,11 @@ struct Def {
     /// Folders whose every `*.AT2` is added (sorted by file name); default none.
     #[serde(default)]
     record_dirs: Vec<String>,
-    /// Record metadata (pulse classes), relative to `studies/` (default
-    /// `../data/ground-motions/records.csv`).
-    #[serde(default = "default_record_table")]
-    record_table: String,
+    /// Record metadata (pulse classes), relative to `studies/`; without it
+    /// `../data/ground-motions/records.csv` if that exists, else every record unclassified
+    /// ([`super::record_classes`]).
+    #[serde(default)]
+    record_table: Option<String>,
     /// Gap of contact 0, m: finite, >= 0.
     gap: f64,
     /// Smallest gap-element stiffness of the log-spaced grid, N/m: finite, > 0.
@@ -160,7 +160,7 @@ impl Study for Stiffness {
     fn cases(&self, ctx: &Ctx) -> Result<Vec<CaseSpec>> {
         let d: Def = ctx.def()?;
         let g = grid(ctx, &d)?;
-        record_classes(ctx, &d.record_table, &g.records)?;
+        record_classes(ctx, d.record_table.as_deref(), &g.records)?;
         let mut v = Vec::new();
         for rec in &g.records {
             for &cr in &g.crs {
@@ -176,7 +176,7 @@ impl Study for Stiffness {
     fn report(&self, ctx: &Ctx, res: &Results) -> Result<()> {
         let d: Def = ctx.def()?;
         let g = grid(ctx, &d)?;
-        let classes = record_classes(ctx, &d.record_table, &g.records)?;
+        let classes = record_classes(ctx, d.record_table.as_deref(), &g.records)?;
         let top = super::contact_floor_displacement;
         let (k0, k1) = (g.ks[0], *g.ks.last().unwrap_or(&g.ks[0]));
         let mut long = Table::new(

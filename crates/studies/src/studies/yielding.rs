@@ -65,8 +65,8 @@ use structure::Scene;
 
 use super::stats::{median, median_band, Spread};
 use super::{
-    amp_contact, contact_floor, default_record_table, failures_note, record_classes, record_name,
-    study_records, write_summary, Ctx, Study,
+    amp_contact, contact_floor, failures_note, record_classes, record_name, study_records,
+    write_summary, Ctx, Study,
 };
 use crate::plot::{figure, Marker, Panel, PanelKind, Series, VLine};
 use crate::sweep::{CaseOutputs, CaseSpec, Result, Results, StudyError};
@@ -85,9 +85,11 @@ struct Def {
     /// Folders whose every `*.AT2` is added (sorted by file name).
     #[serde(default)]
     record_dirs: Vec<String>,
-    /// Record metadata (pulse classes), relative to `studies/`.
-    #[serde(default = "default_record_table")]
-    record_table: String,
+    /// Record metadata (pulse classes), relative to `studies/`; without it
+    /// `../data/ground-motions/records.csv` if that exists, else every record unclassified
+    /// ([`super::record_classes`]).
+    #[serde(default)]
+    record_table: Option<String>,
     /// PGA levels, g (increasing).
     pga: Vec<f64>,
     /// PGA levels with `--quick`, g (increasing).
@@ -490,7 +492,7 @@ impl Study for Yielding {
         let d: Def = ctx.def()?;
         validate(ctx, &d)?;
         let recs = study_records(ctx, d.records.as_deref(), &d.record_dirs)?;
-        record_classes(ctx, &d.record_table, &recs)?;
+        record_classes(ctx, d.record_table.as_deref(), &recs)?;
         let st = strength(ctx, &d, &recs)?;
         let mut v = Vec::new();
         for rec in &recs {
@@ -906,8 +908,8 @@ impl Study for Yielding {
         let x1 = lv[lv.len() - 1] * 1.04;
         let mut p1 = Panel {
             title: format!(
-                "Share of the {} records where the elastic answer departs by more than {:.0} %",
-                recs.len(),
+                "Share of the {} where the elastic answer departs by more than {:.0} %",
+                crate::table::count(recs.len(), "record", "records"),
                 100.0 * d.band
             ),
             x_label: format!("PGA (g); R = PGA / {} g", d.reference_pga),
@@ -1020,7 +1022,7 @@ impl Study for Yielding {
         let mut reading = Vec::new();
         let (li_lo, li_hi) = (0, lv.len() - 1);
         let (pga_lo, pga_hi) = (lv[li_lo], lv[li_hi]);
-        let classes = record_classes(ctx, &d.record_table, &recs)?;
+        let classes = record_classes(ctx, d.record_table.as_deref(), &recs)?;
         let np = classes
             .iter()
             .filter(|c| **c == super::record_table::PulseClass::Pulse)
@@ -1312,7 +1314,7 @@ impl Study for Yielding {
             .map(|mi| {
                 let ratio = walls[mi].median.zip(walls[0].median).map(|(a, b)| a / b);
                 format!(
-                    "{} {}{} (inside the domain {}; all {} runs {:.1} s)",
+                    "{} {}{} (inside the domain {}; all {} {:.1} s)",
                     mname(mi),
                     ms_txt(walls[mi].median),
                     if mi > 0 {
@@ -1321,7 +1323,7 @@ impl Study for Yielding {
                         String::new()
                     },
                     ms_txt(inside(mi).median),
-                    walls[mi].n,
+                    crate::table::count(walls[mi].n, "run", "runs"),
                     total(mi)
                 )
             })
