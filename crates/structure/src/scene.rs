@@ -348,16 +348,31 @@ fn facings(buildings: &[Building], heights: &[Option<Vec<f64>>], a: usize, b: us
 impl Scene {
     /// The scene file's `[[contacts]]` entry (0-based) contact `i` comes from
     /// ([`Scene::contact_sources`]). A contact past the end of that list is an entry of its
-    /// own, numbered on from the last one listed: with an empty list, contact i comes from
+    /// own, numbered on from the largest one listed: with an empty list, contact i comes from
     /// entry i.
     pub fn contact_source(&self, i: usize) -> usize {
         match self.contact_sources.get(i) {
             Some(&entry) => entry,
-            None => match self.contact_sources.last() {
-                Some(&last) => last + 1 + (i - self.contact_sources.len()),
+            None => match self.contact_sources.iter().max() {
+                Some(&most) => most + 1 + (i - self.contact_sources.len()),
                 None => i,
             },
         }
+    }
+
+    /// The contacts grouped by the scene file's entry they come from
+    /// ([`Scene::contact_source`]): (entry, its contacts' indices in [`Scene::contacts`]), in
+    /// the order of each entry's first contact.
+    pub fn contact_entries(&self) -> Vec<(usize, Vec<usize>)> {
+        let mut entries: Vec<(usize, Vec<usize>)> = Vec::new();
+        for i in 0..self.contacts.len() {
+            let e = self.contact_source(i);
+            match entries.iter_mut().find(|(k, _)| *k == e) {
+                Some((_, v)) => v.push(i),
+                None => entries.push((e, vec![i])),
+            }
+        }
+        entries
     }
 
     /// The facing floors of buildings `a` and `b` (indices in [`Scene::buildings`]).
@@ -1538,6 +1553,20 @@ fn validate(
                     key("file"),
                     format!("record file {} {problem}{relative}", path.display()),
                 ));
+            }
+            // One-column only because `dt` came without `format`: a table of two or more
+            // values per line is refused rather than read value after value.
+            let inferred = g.format.is_none() && matches!(format, RecordFormat::OneColumn { .. });
+            if inferred {
+                crate::ground::record::check_inferred_one_column(
+                    &path,
+                    "give `ground_motion.format = \"two-column\"` without `dt` to read time and \
+                     acceleration, or `format = \"one-column\"` to read every value in order",
+                )
+                .map_err(|source| SceneError::Record {
+                    file: origin.to_string(),
+                    source,
+                })?;
             }
             let rec = GroundMotion::load(&path, &format).map_err(|source| SceneError::Record {
                 file: origin.to_string(),

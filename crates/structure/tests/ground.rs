@@ -1025,12 +1025,11 @@ fn a_header_line_gets_a_hint_naming_the_file_and_line() {
 fn a_two_column_file_read_as_one_column_names_the_line_and_says_what_to_do() {
     let parts = [
         "two.txt line 2",
-        "read as one-column because a time step was given",
+        "(the record is read as one-column)",
         "found 2 values on this line",
         "rising by 0.01",
         "a two-column record",
-        "read it as two-column",
-        "remove dt",
+        "read it as two-column, without a time step",
     ];
     let text = "# t, a\n0.00 0.1\n0.01 0.2\n0.02 0.3\n";
     let e = GroundMotion::from_one_column_str(text, "two.txt", 0.01, Units::G).unwrap_err();
@@ -1057,4 +1056,78 @@ fn counts_of_one_are_singular() {
         &e,
         &["NPTS = 1, but the file holds 2 values (expected exactly 1)"],
     );
+}
+
+#[test]
+fn values_per_line_counts_as_the_readers_split() {
+    use structure::ground::record::values_per_line;
+    assert_eq!(
+        values_per_line("# t a\n\n0 0.1\n0.01, 0.2 # x\n"),
+        Some((2, 3))
+    );
+    assert_eq!(values_per_line("0.1\n-0.2\n\n0.3\n"), Some((1, 1)));
+    assert_eq!(values_per_line("0 0.1\n0.2\n"), None);
+    assert_eq!(values_per_line("# only a comment\n\n"), None);
+}
+
+/// A file read as one-column only because a time step came without a format is refused when
+/// every line of numbers holds the same count of two or more values, whatever its step: a
+/// two-row table and one with uneven times pass the one-column reader's own check (which
+/// needs three rows of uniform times) and would be read value after value.
+#[test]
+fn an_inferred_one_column_refuses_a_table_of_any_step() {
+    use structure::ground::record::check_inferred_one_column;
+    let dir = std::env::temp_dir().join(format!("pound-inferred-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let advice = "give the format";
+    for (name, text, values) in [
+        ("two-rows.txt", "0 0.1\n0.01 0.2\n", 2),
+        (
+            "uneven.txt",
+            "0 0.1\n0.0100 0.2\n0.0201 0.1\n0.0301 0.05\n",
+            2,
+        ),
+        ("three.txt", "0 0.1 0.2\n0.01 0.2 0.3\n", 3),
+    ] {
+        let f = dir.join(name);
+        std::fs::write(&f, text).unwrap();
+        let e = check_inferred_one_column(&f, advice).unwrap_err();
+        assert!(
+            matches!(&e, RecordError::InferredOneColumn { line: 1, values: v, .. } if *v == values),
+            "{name}: {e:?}"
+        );
+        msg_has(
+            &e,
+            &[
+                &format!("{name} line 1: every line of numbers holds {values} values"),
+                "read as one-column because a time step was given without a format",
+                advice,
+            ],
+        );
+        // Read as one-column on purpose (an explicit format), it is read value after value.
+        let g = GroundMotion::load(
+            &f,
+            &RecordFormat::OneColumn {
+                dt: 0.01,
+                units: Units::G,
+            },
+        );
+        assert_eq!(
+            g.unwrap().accel.len(),
+            text.split_whitespace().count(),
+            "{name}"
+        );
+    }
+    // One value per line, or lines of different counts: not a table, read as asked.
+    for (name, text) in [
+        ("one.txt", "0.1\n0.2\n0.3\n"),
+        ("mixed.txt", "0.1 0.2\n0.3\n"),
+    ] {
+        let f = dir.join(name);
+        std::fs::write(&f, text).unwrap();
+        assert!(check_inferred_one_column(&f, advice).is_ok(), "{name}");
+    }
+    // A file that cannot be read is left to the reader.
+    assert!(check_inferred_one_column(&dir.join("missing.txt"), advice).is_ok());
+    std::fs::remove_dir_all(&dir).unwrap();
 }

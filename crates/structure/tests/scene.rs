@@ -1163,7 +1163,7 @@ fn a_dt_without_format_reads_one_column() {
     let g = s.ground.as_ref().unwrap();
     assert_eq!((g.npts(), g.dt), (9, 0.01));
     assert_eq!(g.accel[2], 1.0);
-    // The same through `--set`, and with an upper-case extension that is not .at2.
+    // The same with `dt` given through `--set`.
     let s = load_str(
         &with_record("file = \"pulse.txt\""),
         &["ground_motion.dt=0.02"],
@@ -1209,10 +1209,21 @@ fn a_two_column_file_with_dt_and_no_format_is_refused_naming_the_line() {
             "test.toml",
             "key `ground_motion.file`",
             "pulse_two_column.txt line 2",
+            "every line of numbers holds 2 values",
+            "read as one-column because a time step was given without a format",
+            "give `ground_motion.format = \"two-column\"` without `dt`",
+            "or `format = \"one-column\"` to read every value in order",
+        ],
+    );
+    // Read as one-column on purpose, it is refused by the reader's own check (uniform
+    // times), which names no scene key.
+    let text = with_record("file = \"pulse_two_column.txt\"\nformat = \"one-column\"\ndt = 0.02");
+    err_has(
+        load_str(&text, &[]),
+        &[
+            "pulse_two_column.txt line 2",
             "found 2 values on this line",
-            "a two-column record",
-            "read it as two-column",
-            "remove dt",
+            "read it as two-column, without a time step",
         ],
     );
 }
@@ -1234,6 +1245,19 @@ fn the_aligned_paper_scene_maps_every_contact_to_entry_0() {
     extra.right_dof = 0;
     t.contacts.push(extra);
     assert_eq!(t.contact_source(15), 1);
+    assert_eq!(t.contact_entries().len(), 2);
+    assert_eq!(t.contact_entries()[1], (1, vec![15]));
+    // Entries listed out of order (a scene built in code): the one after them is numbered
+    // on from the largest.
+    let mut u = t.clone();
+    u.contacts.truncate(2);
+    u.contact_sources = vec![1, 0];
+    u.contacts.push(u.contacts[0].clone());
+    assert_eq!(u.contact_source(2), 2);
+    assert_eq!(
+        u.contact_entries(),
+        vec![(1, vec![0]), (0, vec![1]), (2, vec![2])]
+    );
 }
 
 #[test]

@@ -99,6 +99,21 @@ pub fn destination(path: &Path) -> Result<Destination, OutputError> {
     )))
 }
 
+/// Whether `path` names the file standard output writes to: the same device and inode as
+/// stdout's (`/dev/stdout`, `/proc/self/fd/1`, or the file or pipe stdout is redirected to).
+/// False when either cannot be asked (a path that does not exist yet is not stdout).
+pub fn is_stdout(path: &Path) -> bool {
+    use std::os::fd::AsFd;
+    use std::os::unix::fs::MetadataExt;
+    let Ok(fd) = std::io::stdout().as_fd().try_clone_to_owned() else {
+        return false;
+    };
+    let (Ok(out), Ok(p)) = (std::fs::File::from(fd).metadata(), std::fs::metadata(path)) else {
+        return false;
+    };
+    (out.dev(), out.ino()) == (p.dev(), p.ino())
+}
+
 /// Whether two output paths would write the same file: the same file to replace once links
 /// and folders are resolved (`--out link.json --history target.json`), or the same path. Two
 /// outputs to one device (`/dev/null`) are not: each is written through in turn.

@@ -285,16 +285,15 @@ fn gap_law_notes(scene: &structure::Scene) -> Vec<String> {
     if g.law == ContactLaw::Linear {
         // One note per entry of the scene file's `contacts` (whose key it names), however
         // many contacts it expands to (`floors = "aligned"`).
-        let mut noted = Vec::new();
-        for (i, c) in scene.contacts.iter().enumerate() {
-            let entry = scene.contact_source(i);
-            if c.restitution == 1.0 || noted.contains(&entry) {
+        for (entry, group) in scene.contact_entries() {
+            let Some(c) = group
+                .iter()
+                .map(|&i| &scene.contacts[i])
+                .find(|c| c.restitution != 1.0)
+            else {
                 continue;
-            }
-            noted.push(entry);
-            let n = (0..scene.contacts.len())
-                .filter(|&k| scene.contact_source(k) == entry)
-                .count();
+            };
+            let n = group.len();
             let expands = if n > 1 {
                 format!(" (for the {n} contacts this entry expands to)")
             } else {
@@ -351,7 +350,9 @@ fn named_at2(path: &Path) -> bool {
 }
 
 /// The scene overrides that read `studies run --records` files as `--record-format` and
-/// `--record-dt` say (none without them: the format follows each file's extension).
+/// `--record-dt` say: first the study scene's own `ground_motion.format`, `dt` and `units`
+/// removed (they describe its own record), so that without the options the format follows
+/// each file's extension, as [`check_user_records`] reads it.
 /// `--record-dt` alone means one-column, as `pound record FILE --dt S` does (refused when a
 /// file is named `*.at2`); with `--record-format at2` or `two-column` it is refused.
 fn record_overrides(
@@ -387,8 +388,15 @@ fn record_overrides(
             Some(FormatArg::OneColumn) => {}
         }
     }
+    // The study scene's own `format`, `dt` and `units` (for its own record) are removed, so
+    // that the cases read every file as these options say, as [`check_user_records`] does.
+    let reset = [
+        "ground_motion.format=".to_string(),
+        "ground_motion.dt=".to_string(),
+        "ground_motion.units=".to_string(),
+    ];
     let name = match (format, dt) {
-        (None, None) => return Ok(Vec::new()),
+        (None, None) => return Ok(reset.to_vec()),
         (Some(FormatArg::OneColumn), None) => {
             return Err(input(
                 "--record-format one-column: give the records' time step with --record-dt (s)",
@@ -398,7 +406,8 @@ fn record_overrides(
         // --record-dt alone: one-column.
         (None, Some(_)) => format_name(FormatArg::OneColumn),
     };
-    let mut set = vec![format!("ground_motion.format=\"{name}\"")];
+    let mut set = reset.to_vec();
+    set.push(format!("ground_motion.format=\"{name}\""));
     if let Some(dt) = dt {
         set.push(format!("ground_motion.dt={dt:?}"));
     }
@@ -449,18 +458,27 @@ fn check_user_records(
                     .to_string(),
             ),
         };
+        if let (None, Some(_)) = (format, dt) {
+            // One-column only because --record-dt came alone: a table is refused.
+            structure::ground::record::check_inferred_one_column(
+                r,
+                "give --record-format two-column without --record-dt to read time and \
+                 acceleration, or --record-format one-column to read every value in order",
+            )
+            .map_err(|e| input(format!("--records: {}: {e}", r.display())))?;
+        }
         let Err(e) = GroundMotion::load(r, &read) else {
             continue;
         };
+        // The hint only for a file of one value on every line of numbers (not for a table
+        // that fails for another reason, such as uneven times).
         let one_column = matches!(read, RecordFormat::TwoColumn { .. })
-            && GroundMotion::load(
-                r,
-                &RecordFormat::OneColumn {
-                    dt: 1.0,
-                    units: Units::G,
-                },
-            )
-            .is_ok();
+            && std::fs::read(r).is_ok_and(|b| {
+                matches!(
+                    structure::ground::record::values_per_line(&String::from_utf8_lossy(&b)),
+                    Some((1, _))
+                )
+            });
         return Err(input(if one_column {
             format!(
                 "--records: {} holds one value per line, a one-column record, but is read {how}: \
@@ -539,7 +557,16 @@ fn load_record(a: &RecordArgs) -> Result<GroundMotion> {
                 return Err(input("a one-column record needs --dt (s)"))
             }
             (Some(FormatArg::OneColumn), Some(dt)) => RecordFormat::OneColumn { dt, units },
-            (None, Some(dt)) if !is_at2 => RecordFormat::OneColumn { dt, units },
+            (None, Some(dt)) if !is_at2 => {
+                // One-column only because --dt came without --format: a table is refused.
+                structure::ground::record::check_inferred_one_column(
+                    &a.record,
+                    "give --format two-column without --dt to read time and acceleration, or \
+                     --format one-column to read every value in order",
+                )
+                .map_err(input)?;
+                RecordFormat::OneColumn { dt, units }
+            }
             (Some(FormatArg::TwoColumn), Some(_)) => return Err(input(
                 "--dt: a two-column record takes its time step from its time column; remove --dt",
             )),
@@ -572,7 +599,12 @@ fn run(cli: Cli) -> Result<()> {
             // A building the eigen-solver cannot take is named with its scene file.
             let in_scene = |e: structure::ModelError| input(format!("{}: {e}", path.display()));
             // Floors facing the other building mid-story: `pound run` warns about them too.
-            if let Some(w) = report::unmodelled_warning(&scene.unmodelled_facings(), json) {
+            let rest = if json {
+                "in `unmodelled`"
+            } else {
+                "in `unmodelled` of `pound modes --json`"
+            };
+            if let Some(w) = report::unmodelled_warning(&scene.unmodelled_facings(), rest) {
                 eprintln!("warning: {w}");
             }
             let text = if json {
@@ -731,13 +763,17 @@ fn run(cli: Cli) -> Result<()> {
                     );
                 }
             }
-            // The summary goes to stdout unless the JSON does: with `--out -`, or a device or
-            // pipe (`/dev/stdout`, `/dev/null`, a FIFO) that takes it in its place; with a file
-            // (`--out run.json`) it is printed too. Decided before the file is written.
+            // The summary goes to stdout unless the JSON does: `--out -`, or an output that is
+            // stdout's own file (`/dev/stdout`, or the file stdout is redirected to); with any
+            // other file or device (`--out run.json`, `/dev/null`) it is printed too. Decided,
+            // and a folder or unwritable place refused, before the analysis runs.
             let summary = match &out {
                 None => true,
                 Some(p) if p.as_os_str() == "-" => false,
-                Some(p) => matches!(io::destination(p), Ok(io::Destination::Replace(_))),
+                Some(p) => {
+                    io::destination(p).map_err(anyhow::Error::new)?;
+                    !io::is_stdout(p)
+                }
             };
             let mut hist = history.as_ref().map(|_| History::default());
             let result = solvers::run(&scene, method, hist.as_mut())
@@ -749,6 +785,7 @@ fn run(cli: Cli) -> Result<()> {
             } else {
                 let mut free = scene.clone();
                 free.contacts.clear();
+                free.contact_sources.clear();
                 let base = solvers::run(&free, method, None).with_context(|| {
                     format!(
                         "{}: {method} analysis without contact failed",

@@ -247,21 +247,19 @@ pub fn run_header(scene: &Scene) -> String {
                 scene.duration
             ));
         }
-        _ => s.push_str(&format!(
+        (Some(g), None) => s.push_str(&format!(
+            "record: (given in code), PGA {:.3} g as run, duration {:.2} s\n",
+            g.pga() / structure::G,
+            scene.duration
+        )),
+        (None, _) => s.push_str(&format!(
             "record: none (free vibration), duration {:.2} s\n",
             scene.duration
         )),
     }
     // The contacts of each entry, in order of first appearance.
-    let mut entries: Vec<(usize, Vec<usize>)> = Vec::new();
-    for i in 0..scene.contacts.len() {
-        let e = scene.contact_source(i);
-        match entries.iter_mut().find(|(k, _)| *k == e) {
-            Some((_, v)) => v.push(i),
-            None => entries.push((e, vec![i])),
-        }
-    }
-    let lines: Vec<String> = entries
+    let lines: Vec<String> = scene
+        .contact_entries()
         .iter()
         .map(|(_, group)| contact_entry_line(scene, group))
         .collect();
@@ -484,30 +482,21 @@ pub fn overlap_warnings(run: &RunOutput) -> Vec<String> {
             o.left, o.left_floor, o.right, o.right_floor, o.max_overlap, o.time
         ));
     }
-    if !run.unmodelled.is_empty() {
-        w.push(format!(
-            "{}; see `unmodelled`",
-            unmodelled_facing(run.unmodelled.len())
-        ));
-    }
+    w.extend(unmodelled_warning(
+        &run.unmodelled,
+        "in `unmodelled` of the --out JSON",
+    ));
     w
-}
-
-/// The start of the warning about floors that face an adjacent building mid-story.
-fn unmodelled_facing(n: usize) -> String {
-    format!(
-        "{n} floor(s) face an adjacent building mid-story (floor-to-column impact, not modelled)"
-    )
 }
 
 /// Most floor-to-column facings [`unmodelled_warning`] names.
 const FACINGS_NAMED: usize = 3;
 
-/// The `pound modes` warning (stderr) about floors that face an adjacent building mid-story
-/// (the scene gives `story_height` on both and their floors are at other elevations), which
-/// `pound run` warns about too: the first three named, and where the rest are
-/// (`json`: the `unmodelled` key of the output; else `pound modes --json`). `None` without.
-pub fn unmodelled_warning(facings: &[UnmodelledFacing], json: bool) -> Option<String> {
+/// The warning (stderr) of `pound modes` and `pound run` about floors that face an adjacent
+/// building mid-story (the scene gives `story_height` on both and their floors are at other
+/// elevations): the first three named, and `rest` saying where the whole list is (e.g. "in
+/// `unmodelled` of the --out JSON"). `None` without such floors.
+pub fn unmodelled_warning(facings: &[UnmodelledFacing], rest: &str) -> Option<String> {
     if facings.is_empty() {
         return None;
     }
@@ -521,15 +510,13 @@ pub fn unmodelled_warning(facings: &[UnmodelledFacing], json: bool) -> Option<St
             )
         })
         .collect();
-    let rest = facings.len().saturating_sub(FACINGS_NAMED);
-    let more = match (rest, json) {
-        (0, _) => String::new(),
-        (n, true) => format!("; {n} more in `unmodelled`"),
-        (n, false) => format!("; {n} more (all in `unmodelled` of `pound modes --json`)"),
+    let more = match facings.len().saturating_sub(FACINGS_NAMED) {
+        0 => format!(" (listed {rest})"),
+        n => format!("; {n} more (all {rest})"),
     };
     Some(format!(
-        "{}: {}{more}",
-        unmodelled_facing(facings.len()),
+        "{} face an adjacent building mid-story (floor-to-column impact, not modelled): {}{more}",
+        count(facings.len(), "floor", "floors"),
         named.join("; ")
     ))
 }

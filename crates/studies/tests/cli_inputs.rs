@@ -581,8 +581,8 @@ fn modes_warns_about_floors_facing_mid_story() {
     let n = run["unmodelled"].as_array().unwrap().len();
     assert!(n > 3, "{n} facings");
     let head = format!(
-        "warning: {n} floor(s) face an adjacent building mid-story (floor-to-column impact, not \
-        modelled)"
+        "warning: {n} floors face an adjacent building mid-story (floor-to-column impact, not \
+        modelled): floor 1 of low (3.500 m) between levels 1 and 2 of tall"
     );
     assert!(err.contains(&head), "{err}");
     assert!(
@@ -604,7 +604,14 @@ fn modes_warns_about_floors_facing_mid_story() {
     assert_eq!(o.status.code(), Some(0));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v["unmodelled"], run["unmodelled"]);
-    let more = format!("{} more in `unmodelled`", n - 3);
+    let more = format!("{} more (all in `unmodelled`)", n - 3);
+    assert!(
+        String::from_utf8_lossy(&r.stderr).contains(&format!(
+            "{} more (all in `unmodelled` of the --out JSON)",
+            n - 3
+        )),
+        "pound run says where the list is"
+    );
     assert!(String::from_utf8_lossy(&o.stderr).contains(&more));
     // Without story heights every floor faces a floor.
     let plain = d.write(

@@ -439,8 +439,8 @@ fn spectrum_pga_with_a_unit_is_refused_saying_what_is_expected() {
 
 /// The `pound run` summary starts with the record as run (file name, PGA, duration) and the
 /// contacts as resolved; an aligned entry is one line with its count of floor pairs. With
-/// `--out FILE` (a file) the summary is printed too; with `--out -` stdout holds the JSON
-/// alone, and with a device (`/dev/null`) nothing is printed, as before.
+/// `--out FILE` (a file, or a device such as `/dev/null`) the summary is printed too; with
+/// `--out -` or `--out /dev/stdout` (stdout's own file) stdout holds the JSON alone.
 #[test]
 fn run_summary_heads_with_record_and_contacts_and_comes_with_out_file() {
     let d = TempDir::new("summary-head");
@@ -477,17 +477,25 @@ fn run_summary_heads_with_record_and_contacts_and_comes_with_out_file() {
         ),
         "{text}"
     );
-    // `--out -`: the JSON alone; a device: nothing on stdout.
-    let o = run_momentum(&scene(), "2", &["--out", "-"]);
-    let _: serde_json::Value = serde_json::from_slice(&o.stdout).expect("stdout is the JSON");
+    // `--out -` and `--out /dev/stdout` (here the test's pipe): the JSON alone.
+    for to in ["-", "/dev/stdout"] {
+        let o = run_momentum(&scene(), "2", &["--out", to]);
+        assert_eq!(o.status.code(), Some(0), "{to}");
+        let _: serde_json::Value = serde_json::from_slice(&o.stdout).expect("stdout is the JSON");
+    }
+    // Another device takes the JSON, and the summary is printed.
     let o = run_momentum(&scene(), "2", &["--out", "/dev/null"]);
     assert_eq!(o.status.code(), Some(0));
+    assert!(String::from_utf8_lossy(&o.stdout).starts_with("record: "));
+    // A folder is refused before the analysis runs (exit 1, nothing on stdout).
+    let o = run_momentum(&scene(), "2", &["--out", d.path("").to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1));
     assert!(o.stdout.is_empty());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("folder"));
 }
 
-/// The summary's header gives an aligned contact entry as one line with its floor pairs.
-/// (The solver's settings line keeps "1 event-check windows per step" for a soft pair: it is
-/// the `settings` column of every committed `cases.csv`, which a wording change would move.)
+/// The summary's header gives an aligned contact entry of a pair of the user's own as one
+/// line with its floor pairs.
 #[test]
 fn aligned_contacts_are_one_line_of_the_summary() {
     let d = TempDir::new("one-window");

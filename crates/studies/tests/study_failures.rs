@@ -329,11 +329,17 @@ fn record_format_of_user_records() {
             &["--record-format", "one-column"][..],
             &["--record-dt"][..],
         ),
-        // `--record-dt` alone reads two columns as one: refused, naming the file.
+        // `--record-dt` alone would read two columns as one: refused, naming the file and
+        // the options to give.
         (
             &two,
             &["--record-dt", "0.01"][..],
-            &["two.dat", "--record-dt 0.01", "one column"][..],
+            &[
+                "--records: ",
+                "two.dat line",
+                "every line of numbers holds 2 values",
+                "give --record-format two-column without --record-dt",
+            ][..],
         ),
         (
             &two,
@@ -363,6 +369,51 @@ fn record_format_of_user_records() {
         );
         assert!(!out.exists(), "{extra:?}: nothing written");
     }
+    // A table that fails for another reason (uneven times) is told that reason, not that it
+    // holds one value per line.
+    let uneven = d.write("uneven.dat", "0 0.1\n0.01 0.2\n0.03 0.1\n0.04 0.0\n");
+    let (o, out) = run("uneven", &uneven, &[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--records: ") && err.contains("uneven.dat"),
+        "{err}"
+    );
+    assert!(!err.contains("one value per line"), "{err}");
+    assert!(!out.exists());
+    // A study scene of one's own whose record is one-column (`format`, `dt`): --records
+    // files are read as the options (here none: by their names) say, not in its format.
+    let own = TempDir::new("recformat-own");
+    own.write("own.txt", &std::fs::read_to_string(&one).unwrap());
+    let scene = std::fs::read_to_string(format!("{studies}/paper/scene.toml"))
+        .unwrap()
+        .replace(
+            "file = \"../../data/ground-motions/RSN752_LOMAP_CAP000.AT2\"",
+            "file = \"own.txt\"\nformat = \"one-column\"\ndt = 0.01\nunits = \"g\"",
+        );
+    assert!(scene.contains("own.txt"));
+    own.write("own.toml", &scene);
+    let def = std::fs::read_to_string(format!("{studies}/modes.toml"))
+        .unwrap()
+        .replace("scene = \"paper/scene.toml\"", "scene = \"own.toml\"")
+        .replace("\"../data/", &format!("\"{studies}/../data/"));
+    own.write("modes.toml", &def);
+    let out = own.path("out");
+    let o = pound(&[
+        "studies",
+        "run",
+        "modes",
+        "--quick",
+        "--studies-dir",
+        own.0.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--records",
+        two.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // The same peaks as the paper scene with the same file (case ids differ: the scene).
+    assert_eq!(peaks(&out), peaks(&out2));
     // Without --records the record options are a usage error.
     let o = pound(&["studies", "run", "modes", "--record-format", "at2"]);
     assert_eq!(o.status.code(), Some(2));

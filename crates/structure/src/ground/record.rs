@@ -151,6 +151,22 @@ pub enum RecordError {
         line: usize,
         step: f64,
     },
+    /// A file read as one-column only because a time step was given without a format, whose
+    /// every line of numbers holds the same count `values` ≥ 2 (a table such as time and
+    /// acceleration, whatever its step): refused rather than read value after value.
+    /// `advice` names the settings to give (the caller's keys or flags). `line`: its first
+    /// line of numbers.
+    #[error(
+        "{origin} line {line}: every line of numbers holds {values} values, as a table with a \
+         time column does, but the file is read as one-column because a time step was given \
+         without a format: {advice}"
+    )]
+    InferredOneColumn {
+        origin: String,
+        line: usize,
+        values: usize,
+        advice: String,
+    },
     /// The number of values declared in the header (at `line`) differs from the number present.
     #[error(
         "{origin} line {line}: the header declares NPTS = {declared}, but the file holds {} \
@@ -224,11 +240,56 @@ const HEADER_HINT: &str = "; a header line is not read: remove it or start it wi
 /// [`RecordError::TwoColumnsAsOne`] after its file and line.
 fn two_columns_as_one(step: f64) -> String {
     format!(
-        "expected one-column values (the record is read as one-column because a time step was \
-         given), found 2 values on this line and on every line of numbers, the first rising by \
-         {step} like times (s): a two-column record (time, acceleration); read it as two-column \
-         (format two-column) and remove dt, which it takes from its time column"
+        "expected one-column values (the record is read as one-column), found 2 values on this \
+         line and on every line of numbers, the first rising by {step} like times (s): a \
+         two-column record (time, acceleration); read it as two-column, without a time step \
+         (it takes its step from its time column)"
     )
+}
+
+/// The count of values every line of numbers of `text` holds, and the first such line
+/// (1-based), as the two- and one-column readers split lines (`#` starts a comment; blank
+/// lines skipped); `None` when lines hold different counts or there is no line of numbers.
+pub fn values_per_line(text: &str) -> Option<(usize, usize)> {
+    let mut found: Option<(usize, usize)> = None;
+    for (i, raw) in text.lines().enumerate() {
+        let l = raw.split('#').next().unwrap_or("");
+        let n = tokens(l, true).len();
+        if n == 0 {
+            continue;
+        }
+        match found {
+            None => found = Some((n, i + 1)),
+            Some((m, _)) if m != n => return None,
+            Some(_) => {}
+        }
+    }
+    found
+}
+
+/// Refuses a file about to be read as one-column only because a time step was given without
+/// a format ([`RecordError::InferredOneColumn`]) when every line of numbers holds the same
+/// count of two or more values: then it is most likely a table with a time column, and read
+/// value after value its times would become accelerations (a two-column file whose steps are
+/// not uniform, or of two rows, passes the one-column reader's own check). A file that
+/// cannot be read is left to the reader, which says why. `advice`: what to give instead, in
+/// the caller's keys or flags.
+pub fn check_inferred_one_column(path: &Path, advice: &str) -> Result<(), RecordError> {
+    let Ok(bytes) = std::fs::read(path) else {
+        return Ok(());
+    };
+    match values_per_line(&String::from_utf8_lossy(&bytes)) {
+        Some((values, line)) if values >= 2 => Err(RecordError::InferredOneColumn {
+            origin: path.file_name().map_or_else(
+                || path.display().to_string(),
+                |f| f.to_string_lossy().into_owned(),
+            ),
+            line,
+            values,
+            advice: advice.to_string(),
+        }),
+        _ => Ok(()),
+    }
 }
 
 /// An I/O error in words: "is a directory" rather than the OS's wording for it.
