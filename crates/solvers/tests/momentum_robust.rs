@@ -270,6 +270,7 @@ fn aligned_pair_with_chattering_and_held_neighbours_runs_to_the_end() {
 /// 16 ε of that scale (measured 1–2 ε on a 3 + 3-floor pair).
 #[test]
 fn runs_too_short_to_gather_energy_close_their_audit_to_round_off() {
+    let mut beyond_old_scale = 0;
     for d in ["1e-12", "1e-9", "1e-7", "1e-5"] {
         let s = paper(&[&format!("analysis.duration={d}")]);
         let scale = Problem::new(&s).unwrap().static_energy;
@@ -299,7 +300,18 @@ fn runs_too_short_to_gather_energy_close_their_audit_to_round_off() {
             e.balance_error.abs() <= 16.0 * f64::EPSILON * scale,
             "{d} s: {e:?}, static energy {scale:e} J"
         );
+        // Without the static energy in its scale the audit would have stopped the run.
+        if e.balance_error != 0.0 {
+            beyond_old_scale += usize::from(
+                e.balance_error.abs()
+                    > solvers::momentum::AUDIT_TOLERANCE * (e.initial + e.input.abs() + e.final_),
+            );
+        }
     }
+    assert!(
+        beyond_old_scale > 0,
+        "no duration needs the static energy in the audit's scale"
+    );
 }
 
 /// A state whose squares overflow (an initial velocity of 1e200 m/s) stops the run at t = 0

@@ -1563,10 +1563,8 @@ fn validate(
                     "give `ground_motion.format = \"two-column\"` without `dt` to read time and \
                      acceleration, or `format = \"one-column\"` to read every value in order",
                 )
-                .map_err(|source| SceneError::Record {
-                    file: origin.to_string(),
-                    source,
-                })?;
+                // Named under `dt`: it is what chose the one-column format here.
+                .map_err(|e| invalid(key("dt"), e.to_string()))?;
             }
             let rec = GroundMotion::load(&path, &format).map_err(|source| SceneError::Record {
                 file: origin.to_string(),

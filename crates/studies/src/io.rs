@@ -102,6 +102,7 @@ pub fn destination(path: &Path) -> Result<Destination, OutputError> {
 /// Whether `path` names the file standard output writes to: the same device and inode as
 /// stdout's (`/dev/stdout`, `/proc/self/fd/1`, or the file or pipe stdout is redirected to).
 /// False when either cannot be asked (a path that does not exist yet is not stdout).
+#[cfg(unix)]
 pub fn is_stdout(path: &Path) -> bool {
     use std::os::fd::AsFd;
     use std::os::unix::fs::MetadataExt;
@@ -112,6 +113,12 @@ pub fn is_stdout(path: &Path) -> bool {
         return false;
     };
     (out.dev(), out.ino()) == (p.dev(), p.ino())
+}
+
+/// Elsewhere stdout's file cannot be asked: no path is taken for it (`--out -` still is).
+#[cfg(not(unix))]
+pub fn is_stdout(_path: &Path) -> bool {
+    false
 }
 
 /// Whether two output paths would write the same file: the same file to replace once links

@@ -90,7 +90,7 @@ enum Command {
         #[arg(long = "set", value_name = "PATH=VALUE")]
         set: Vec<String>,
         /// Write the full result as JSON here; the summary is still printed, except with `-`
-        /// (the JSON on stdout instead) or a device or pipe (/dev/stdout, /dev/null, a FIFO).
+        /// or stdout's own file (/dev/stdout, or where stdout is redirected): the JSON instead.
         #[arg(long)]
         out: Option<PathBuf>,
         /// Write floor displacements and story shears over time as CSV here.
@@ -528,7 +528,7 @@ fn load_record(a: &RecordArgs) -> Result<GroundMotion> {
     if at2 {
         if a.dt.is_some() {
             return Err(input(format!(
-                "--dt: {} is read as a PEER AT2 record, which states its time step on line 4; remove --dt (or give --format one-column / two-column)",
+                "--dt: {} is read as a PEER AT2 record, which states its time step on line 4; remove --dt (or give --format one-column)",
                 a.record.display()
             )));
         }
@@ -747,9 +747,19 @@ fn run(cli: Cli) -> Result<()> {
                             short(p)
                         ),
                     ),
+                    // An AT2 record's units are its header's (line 3; `units` is refused).
                     None => implausible_pga(
                         g,
-                        "check the record's units (ground_motion.units and ground_motion.scale)",
+                        match scene.ground_source.as_ref().map(|s| &s.format) {
+                            Some(structure::RecordFormat::At2) => {
+                                "check the record's units (its header, line 3) and \
+                                 ground_motion.scale"
+                            }
+                            _ => {
+                                "check the record's units (ground_motion.units and \
+                                 ground_motion.scale)"
+                            }
+                        },
                     ),
                 }
             }
@@ -766,7 +776,11 @@ fn run(cli: Cli) -> Result<()> {
             // The summary goes to stdout unless the JSON does: `--out -`, or an output that is
             // stdout's own file (`/dev/stdout`, or the file stdout is redirected to); with any
             // other file or device (`--out run.json`, `/dev/null`) it is printed too. Decided,
-            // and a folder or unwritable place refused, before the analysis runs.
+            // and a folder or unwritable place (for `--history` too) refused, before the
+            // analysis runs.
+            if let Some(h) = &history {
+                io::destination(h).map_err(anyhow::Error::new)?;
+            }
             let summary = match &out {
                 None => true,
                 Some(p) if p.as_os_str() == "-" => false,

@@ -380,7 +380,8 @@ fn out_dash_prints_the_json_on_stdout() {
 }
 
 /// A ground motion far above any recorded PGA (here a record scaled by 981, as a record in
-/// cm/s² read as g would be) is run, with a warning that names the keys to check.
+/// cm/s² read as g would be) is run, with a warning that names what to check: for an AT2
+/// record its header's units (a scene's `units` is refused for AT2) and `scale`.
 #[test]
 fn implausible_pga_is_warned_about() {
     let d = TempDir::new("bigpga");
@@ -397,7 +398,20 @@ fn implausible_pga_is_warned_about() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(0), "{err}");
     assert!(
-        err.contains("PGA is") && err.contains("ground_motion.units"),
+        err.contains("PGA is")
+            && err
+                .contains("check the record's units (its header, line 3) and ground_motion.scale"),
+        "{err}"
+    );
+    assert!(!err.contains("ground_motion.units"), "{err}");
+    // A two-column record: its units are the scene's `units` key.
+    let two = d.write("two.txt", "0 0.1\n0.5 0.2\n1.0 -0.1\n1.5 0.0\n");
+    let sc = d.write("scene-two.toml", &text.replace(rec, two.to_str().unwrap()));
+    let o = run_momentum(sc.to_str().unwrap(), "1", &[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    assert!(
+        err.contains("check the record's units (ground_motion.units and ground_motion.scale)"),
         "{err}"
     );
     let normal = run_momentum(&scene(), "1", &[]);
@@ -489,6 +503,11 @@ fn run_summary_heads_with_record_and_contacts_and_comes_with_out_file() {
     assert!(String::from_utf8_lossy(&o.stdout).starts_with("record: "));
     // A folder is refused before the analysis runs (exit 1, nothing on stdout).
     let o = run_momentum(&scene(), "2", &["--out", d.path("").to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(o.stdout.is_empty());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("folder"));
+    // So is a folder given to --history.
+    let o = run_momentum(&scene(), "2", &["--history", d.path("").to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(1));
     assert!(o.stdout.is_empty());
     assert!(String::from_utf8_lossy(&o.stderr).contains("folder"));

@@ -111,16 +111,7 @@ fn refused_with(study: &str, edit: impl FnOnce(&Path), expect: &[&str]) -> Strin
     copy_studies(Path::new(STUDIES), &dir);
     edit(&dir);
     let out = d.path("out");
-    let o = pound(&[
-        "studies",
-        "run",
-        study,
-        "--quick",
-        "--studies-dir",
-        dir.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = common::quick_run(study, dir.to_str().unwrap(), out.to_str().unwrap());
     let err = String::from_utf8_lossy(&o.stderr).into_owned();
     let what = format!("{study} {expect:?}: {err}");
     assert_eq!(o.status.code(), Some(2), "exit code, {what}");

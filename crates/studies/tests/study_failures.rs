@@ -4,9 +4,31 @@
 
 mod common;
 use common::{pound, TempDir};
+use std::path::{Path, PathBuf};
+use std::process::Output;
 
 fn studies_dir() -> String {
-    concat!(env!("CARGO_MANIFEST_DIR"), "/../../studies").to_string()
+    common::STUDIES.to_string()
+}
+
+/// The same 14 s record, 0.3 g · sin(2π·1.5 t) · e^(−decay·t) at 0.01 s, as a one-column file
+/// `one.txt` and a two-column file (time, acceleration) named `two`, in `d`.
+fn sine_records(d: &TempDir, decay: f64, two: &str) -> (PathBuf, PathBuf) {
+    let (mut a1, mut a2) = (String::new(), String::new());
+    for i in 0..1400 {
+        let t = i as f64 * 0.01;
+        let a = 0.3 * (2.0 * std::f64::consts::PI * 1.5 * t).sin() * (-decay * t).exp();
+        a1.push_str(&format!("{a:.6}\n"));
+        a2.push_str(&format!("{t:.2} {a:.6}\n"));
+    }
+    (d.write("one.txt", &a1), d.write(two, &a2))
+}
+
+/// `pound studies run <study> --quick --studies-dir <studies> --out <out> --records …`.
+fn quick_with_records(study: &str, studies: &str, out: &Path, records: &[&PathBuf]) -> Output {
+    let mut extra = vec!["--records"];
+    extra.extend(records.iter().map(|r| r.to_str().unwrap()));
+    common::quick_run_with(study, studies, out.to_str().unwrap(), &extra)
 }
 
 /// A study whose cases fail in the solver (here the momentum method at c_r = 0 without its
@@ -218,15 +240,7 @@ fn study_scene_with_contact_elsewhere_is_refused() {
 #[test]
 fn record_format_of_user_records() {
     let d = TempDir::new("recformat");
-    let (mut one, mut two) = (String::new(), String::new());
-    for i in 0..1400 {
-        let t = i as f64 * 0.01;
-        let a = 0.3 * (2.0 * std::f64::consts::PI * 1.5 * t).sin() * (-0.1 * t).exp();
-        one.push_str(&format!("{a:.6}\n"));
-        two.push_str(&format!("{t:.2} {a:.6}\n"));
-    }
-    let one = d.write("one.txt", &one);
-    let two = d.write("two.dat", &two);
+    let (one, two) = sine_records(&d, 0.1, "two.dat");
     let studies = studies_dir();
     let run = |out: &str, rec: &std::path::Path, extra: &[&str]| {
         let out = d.path(out);
@@ -399,18 +413,7 @@ fn record_format_of_user_records() {
         .replace("\"../data/", &format!("\"{studies}/../data/"));
     own.write("modes.toml", &def);
     let out = own.path("out");
-    let o = pound(&[
-        "studies",
-        "run",
-        "modes",
-        "--quick",
-        "--studies-dir",
-        own.0.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--records",
-        two.to_str().unwrap(),
-    ]);
+    let o = quick_with_records("modes", own.0.to_str().unwrap(), &out, &[&two]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     // The same peaks as the paper scene with the same file (case ids differ: the scene).
     assert_eq!(peaks(&out), peaks(&out2));
@@ -427,15 +430,7 @@ fn record_format_of_user_records() {
 #[test]
 fn every_user_record_is_read_before_the_sweep() {
     let d = TempDir::new("recs-all-read");
-    let (mut one, mut two) = (String::new(), String::new());
-    for i in 0..1400 {
-        let t = i as f64 * 0.01;
-        let a = 0.3 * (2.0 * std::f64::consts::PI * 1.5 * t).sin();
-        one.push_str(&format!("{a:.6}\n"));
-        two.push_str(&format!("{t:.2} {a:.6}\n"));
-    }
-    let one = d.write("one.txt", &one);
-    let two = d.write("two.txt", &two);
+    let (one, two) = sine_records(&d, 0.0, "two.txt");
     let bad_at2 = d.write("broken.AT2", "PEER\nno header\n");
     let studies = studies_dir();
     for (k, recs, named) in [
@@ -444,19 +439,7 @@ fn every_user_record_is_read_before_the_sweep() {
         (2, [&two, &bad_at2], "broken.AT2"),
     ] {
         let out = d.path(&format!("out{k}"));
-        let o = pound(&[
-            "studies",
-            "run",
-            "gap",
-            "--quick",
-            "--studies-dir",
-            &studies,
-            "--out",
-            out.to_str().unwrap(),
-            "--records",
-            recs[0].to_str().unwrap(),
-            recs[1].to_str().unwrap(),
-        ]);
+        let o = quick_with_records("gap", &studies, &out, &[recs[0], recs[1]]);
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(2), "{recs:?}: {err}");
         assert!(
@@ -469,19 +452,7 @@ fn every_user_record_is_read_before_the_sweep() {
     // Both readable: the sweep runs (on the first only, --quick).
     let other = d.write("other.txt", &std::fs::read_to_string(&two).unwrap());
     let out = d.path("ok");
-    let o = pound(&[
-        "studies",
-        "run",
-        "gap",
-        "--quick",
-        "--studies-dir",
-        &studies,
-        "--out",
-        out.to_str().unwrap(),
-        "--records",
-        two.to_str().unwrap(),
-        other.to_str().unwrap(),
-    ]);
+    let o = quick_with_records("gap", &studies, &out, &[&two, &other]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
 

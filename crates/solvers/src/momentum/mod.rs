@@ -101,7 +101,7 @@ pub mod trig;
 pub use audit::ContactAudit;
 pub use impact::ImpactDiagnostics;
 pub use problem::Problem;
-pub use stepper::{Diagnostics, State, Step, Stepper};
+pub use stepper::{Diagnostics, State, Step, Stepper, AUDIT_TOLERANCE};
 
 use structure::scene::ImpulseVariant;
 use structure::Scene;

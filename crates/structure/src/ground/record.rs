@@ -330,17 +330,16 @@ const AT2_UNITS: &str = "the acceleration units on line 3, e.g. \"ACCELERATION T
 fn refuse_two_columns(text: &str, origin: &str) -> Result<(), RecordError> {
     let mut firsts = Vec::new();
     let mut first_line = 0;
-    let mut data_lines = 0;
+    let mut first_data_line = true;
     for (i, raw) in text.lines().enumerate() {
         let l = raw.split('#').next().unwrap_or("");
         let toks = tokens(l, true);
         if toks.is_empty() {
             continue;
         }
-        data_lines += 1;
         // A header line (the first data line, starting with a word) does not hide the two
         // columns below it: they are what to report first.
-        if data_lines == 1 && parse_number(toks[0].text).is_none() {
+        if std::mem::take(&mut first_data_line) && parse_number(toks[0].text).is_none() {
             continue;
         }
         if toks.len() != 2 {

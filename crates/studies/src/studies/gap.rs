@@ -630,9 +630,9 @@ impl Study for Gap {
             )
         });
         if let Some(why) = &not_computed {
-            let header: Vec<&str> = claims.header.iter().map(String::as_str).collect();
-            let csv = Table::new(&claims.title, &header).csv()?;
-            crate::io::write_atomic(&ctx.dir.join("gap_5_vs_10.csv"), &csv)?;
+            // The rows pushed above are all n = 0: the CSV keeps the header alone.
+            claims.rows.clear();
+            crate::io::write_atomic(&ctx.dir.join("gap_5_vs_10.csv"), &claims.csv()?)?;
             crate::io::write_atomic(
                 &ctx.dir.join("gap_5_vs_10.md"),
                 format!("5 cm against 10 cm gap: {why}.\n").as_bytes(),

@@ -56,7 +56,17 @@ pub const STUDIES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../studies");
 
 /// `pound studies run <study> --quick --studies-dir <studies_dir> --out <out>`.
 pub fn quick_run(study: &str, studies_dir: &str, out: &str) -> std::process::Output {
-    pound(&[
+    quick_run_with(study, studies_dir, out, &[])
+}
+
+/// [`quick_run`] with `extra` arguments after it (`--records FILE…`, say).
+pub fn quick_run_with(
+    study: &str,
+    studies_dir: &str,
+    out: &str,
+    extra: &[&str],
+) -> std::process::Output {
+    let mut a = vec![
         "studies",
         "run",
         study,
@@ -65,7 +75,9 @@ pub fn quick_run(study: &str, studies_dir: &str, out: &str) -> std::process::Out
         studies_dir,
         "--out",
         out,
-    ])
+    ];
+    a.extend_from_slice(extra);
+    pound(&a)
 }
 
 /// Runs `pound studies run <study> --quick` into `<d>/results`, asserts success and returns
