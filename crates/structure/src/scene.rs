@@ -871,9 +871,9 @@ fn validate(
                 return Err(invalid(
                     key("damping_ratio"),
                     format!(
-                        "a list of {} ratio(s) for a building of {}: expected one ratio per \
-                         mode ({}), or a single number for every mode",
-                        v.len(),
+                        "a list of {} for a building of {}: expected one ratio per mode ({}), \
+                         or a single number for every mode",
+                        crate::count(v.len(), "ratio", "ratios"),
                         crate::count(masses.len(), "floor", "floors"),
                         masses.len()
                     ),

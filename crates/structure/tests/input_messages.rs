@@ -639,7 +639,7 @@ fn counts_of_one_are_singular_in_scene_messages() {
         (
             "masses = [1e6]\nstory_stiffness = [1e9]\ndamping_ratio = [0.05, 0.02]".to_string(),
             "buildings[0].damping_ratio",
-            "a list of 2 ratio(s) for a building of 1 floor:",
+            "a list of 2 ratios for a building of 1 floor:",
         ),
     ] {
         let m = err_has(load(&one(&body), &[]), &["scene.toml", key, want]);

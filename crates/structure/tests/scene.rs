@@ -824,7 +824,7 @@ fn apply(text: &str, m: &Mutation) -> String {
 }
 
 fn tiny_with_record() -> String {
-    format!("{TINY}\n[ground_motion]\nfile = \"pulse_two_column.txt\"\npga = 0.3\n")
+    with_record("file = \"pulse_two_column.txt\"\npga = 0.3")
 }
 
 proptest! {

@@ -1135,7 +1135,7 @@ fn studies_command(command: StudiesCommand) -> Result<()> {
 
 /// Cases of a sweep that did not finish as defined (exit code 4).
 #[derive(Debug, thiserror::Error)]
-#[error("{} case(s) failed (listed in each study's summary.md):\n  {}", .0.len(), .0.join("\n  "))]
+#[error("{} failed (listed in each study's summary.md):\n  {}", structure::count(.0.len(), "case", "cases"), .0.join("\n  "))]
 struct FailedCases(Vec<String>);
 
 fn failed_cases(unexpected: &[String]) -> Result<()> {

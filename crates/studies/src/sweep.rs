@@ -690,7 +690,8 @@ impl Shard {
         let index = id - min + 1;
         if count < 1 || index < 1 || index > count {
             return Err(format!(
-                "SLURM_ARRAY_TASK_ID = {id} is outside the array's {count} task(s) from {min}: give --shard i/n"
+                "SLURM_ARRAY_TASK_ID = {id} is outside the array's {} from {min}: give --shard i/n",
+                structure::count(count, "task", "tasks")
             ));
         }
         Ok(Some(Shard {

@@ -1486,7 +1486,7 @@ fn study_scene_without_a_pair_is_refused() {
         &[
             "study `gap`",
             "two buildings joined by a contact",
-            "1 building(s)",
+            "1 building and",
         ],
         &[&out],
     );

@@ -143,7 +143,7 @@ fn scene_values_that_used_to_be_repeated_clamped_or_skipped() {
         ],
         &[
             "buildings[1].damping_ratio",
-            "2 ratio(s)",
+            "2 ratios",
             "15 floors",
             "one ratio per mode",
         ],

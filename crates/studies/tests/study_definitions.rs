@@ -397,9 +397,9 @@ fn a_bad_later_definition_stops_the_command_before_any_study_runs() {
     assert!(written.is_empty(), "nothing written: {written:?}");
 }
 
-/// The studies' own list of those that take `record_table` is the studies whose committed
-/// definitions give it, so that the note about a missing default table is said for exactly
-/// those.
+/// The studies that say they take `record_table` (`Study::takes_record_table`) are the
+/// studies whose committed definitions give it, so that the note about a missing default
+/// table is said for exactly those.
 #[test]
 fn the_studies_with_a_record_table_are_listed() {
     for name in NAMES.iter().chain(&EXTRA) {
@@ -407,7 +407,7 @@ fn the_studies_with_a_record_table_are_listed() {
         let def: toml::Table = toml::from_str(&text).unwrap();
         assert_eq!(
             def.contains_key("record_table"),
-            studies::studies::RECORD_TABLE_STUDIES.contains(name),
+            study(name).unwrap().takes_record_table(),
             "{name}"
         );
     }
@@ -477,8 +477,16 @@ fn gap_5_vs_10_says_why_when_the_grid_lacks_the_gaps() {
     let dir = d.path("studies");
     copy_studies(&root().join("studies"), &dir);
     let def = std::fs::read_to_string(dir.join("gap.toml")).unwrap();
-    // --quick: 6 gaps from 0 to gap_max.
-    for (gap_max, computed) in [("0.20", false), ("0.25", true)] {
+    // --quick: 6 gaps from 0 to gap_max. 0.20: neither 5 nor 10 cm; 0.50: 10 cm but no
+    // 5 cm (the singular); 0.25: both, the table.
+    let neither =
+        "not computed: the gap grid (0, 4, 8, 12, 16, 20 cm) has no 5 cm and 10 cm values";
+    let no_five = "not computed: the gap grid (0, 10, 20, 30, 40, 50 cm) has no 5 cm value";
+    for (gap_max, why) in [
+        ("0.20", Some(neither)),
+        ("0.50", Some(no_five)),
+        ("0.25", None),
+    ] {
         let text: String = def
             .lines()
             .map(|l| {
@@ -495,26 +503,31 @@ fn gap_5_vs_10_says_why_when_the_grid_lacks_the_gaps() {
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         let md = std::fs::read_to_string(out.join("gap/gap_5_vs_10.md")).unwrap();
         let summary = std::fs::read_to_string(out.join("gap/summary.md")).unwrap();
-        let why =
-            "not computed: the gap grid (0, 4, 8, 12, 16, 20 cm) has no 5 cm and 10 cm values";
-        if computed {
-            assert!(
-                md.contains("| amplification, building 2 contact story |"),
-                "{md}"
-            );
-            assert!(!summary.contains("not computed"), "{summary}");
-        } else {
-            assert_eq!(md.lines().count(), 1, "{md}");
-            assert!(md.contains(why), "{md}");
-            assert!(!md.contains('–'), "{md}");
-            assert!(
-                summary.contains(&format!("(`gap_5_vs_10.md`): {why}")),
-                "{summary}"
-            );
-            assert!(
-                !summary.contains("| amplification, building 2"),
-                "{summary}"
-            );
+        let csv = std::fs::read_to_string(out.join("gap/gap_5_vs_10.csv")).unwrap();
+        match why {
+            None => {
+                assert!(
+                    md.contains("| amplification, building 2 contact story |"),
+                    "{md}"
+                );
+                assert!(!summary.contains("not computed"), "{summary}");
+                assert_eq!(csv.lines().count(), 4, "{csv}");
+            }
+            Some(why) => {
+                assert_eq!(md.lines().count(), 1, "{md}");
+                assert!(md.contains(why), "{md}");
+                assert!(!md.contains('–'), "{md}");
+                assert!(
+                    summary.contains(&format!("(`gap_5_vs_10.md`): {why}")),
+                    "{summary}"
+                );
+                assert!(
+                    !summary.contains("| amplification, building 2"),
+                    "{summary}"
+                );
+                // The header alone.
+                assert_eq!(csv.lines().count(), 1, "{csv}");
+            }
         }
     }
 }

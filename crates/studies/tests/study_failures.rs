@@ -64,7 +64,10 @@ fn failed_cases_exit_4_and_are_named() {
     );
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(4), "{err}");
-    assert!(err.contains("case(s) failed"), "{err}");
+    assert!(
+        err.contains(" failed (listed in each study's summary.md)"),
+        "{err}"
+    );
     assert!(
         err.contains("Stalled") || err.contains("stall"),
         "the reason is named: {err}"

@@ -109,6 +109,10 @@ pub fn cqc_rho(zeta: f64, r: f64) -> f64 {
 }
 
 impl Study for Gap {
+    fn takes_record_table(&self) -> bool {
+        true
+    }
+
     fn cases(&self, ctx: &Ctx) -> Result<Vec<CaseSpec>> {
         let d: Def = ctx.def()?;
         require_pga(ctx, d.pga)?;

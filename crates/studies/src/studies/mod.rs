@@ -290,6 +290,12 @@ pub fn record_name(path: &str) -> String {
 pub trait Study: Sync {
     fn cases(&self, ctx: &Ctx) -> Result<Vec<CaseSpec>>;
     fn report(&self, ctx: &Ctx, res: &Results) -> Result<()>;
+    /// Whether the study's definition takes a `record_table` key (record pulse classes,
+    /// [`record_classes`]); default no. [`definition_notes`] says when such a study will
+    /// classify no record.
+    fn takes_record_table(&self) -> bool {
+        false
+    }
 }
 
 pub fn study(name: &str) -> Option<&'static dyn Study> {
@@ -383,11 +389,11 @@ pub fn all_cases(st: &dyn Study, ctx: &Ctx) -> Result<Vec<CaseSpec>> {
             return Err(StudyError::Definition {
                 file: ctx.def_file.clone(),
                 message: format!(
-                    "study `{}` needs a scene with two buildings joined by a contact; `{}` has {} building(s) and {} contact(s)",
+                    "study `{}` needs a scene with two buildings joined by a contact; `{}` has {} and {}",
                     ctx.name,
                     first.scene,
-                    scene.buildings.len(),
-                    scene.contacts.len()
+                    structure::count(scene.buildings.len(), "building", "buildings"),
+                    structure::count(scene.contacts.len(), "contact", "contacts")
                 ),
             });
         }
@@ -1082,22 +1088,13 @@ pub fn failures_note(res: &Results) -> Option<String> {
 /// ([`record_classes`]).
 pub const DEFAULT_RECORD_TABLE: &str = "../data/ground-motions/records.csv";
 
-/// The studies whose definitions take a `record_table` key (record pulse classes).
-pub const RECORD_TABLE_STUDIES: [&str; 6] = [
-    "stiffness",
-    "modes",
-    "restitution",
-    "gap",
-    "yielding",
-    "yielding-strong",
-];
-
 /// What a study prints on stderr about its definition before it runs (`note: …`): a study
-/// of [`RECORD_TABLE_STUDIES`] without a `record_table` key whose default table
-/// ([`DEFAULT_RECORD_TABLE`]) does not exist beside the studies folder classifies no record.
+/// that takes a record table ([`Study::takes_record_table`]) but has no `record_table` key
+/// and whose default table ([`DEFAULT_RECORD_TABLE`]) does not exist beside the studies
+/// folder classifies no record.
 pub fn definition_notes(ctx: &Ctx) -> Vec<String> {
     let mut notes = Vec::new();
-    if RECORD_TABLE_STUDIES.contains(&ctx.name.as_str())
+    if study(&ctx.name).is_some_and(|s| s.takes_record_table())
         && !ctx.def.contains_key("record_table")
         && !ctx.studies_dir.join(DEFAULT_RECORD_TABLE).exists()
     {

@@ -73,6 +73,10 @@ fn modes(ctx: &Ctx, d: &Def) -> Vec<usize> {
 }
 
 impl Study for Modes {
+    fn takes_record_table(&self) -> bool {
+        true
+    }
+
     fn cases(&self, ctx: &Ctx) -> Result<Vec<CaseSpec>> {
         let d: Def = ctx.def()?;
         require_pga(ctx, d.pga)?;

@@ -83,6 +83,10 @@ fn methods(ctx: &Ctx, d: &Def, rec: &str, cr: f64) -> Vec<(String, CaseSpec)> {
 }
 
 impl Study for Restitution {
+    fn takes_record_table(&self) -> bool {
+        true
+    }
+
     fn cases(&self, ctx: &Ctx) -> Result<Vec<CaseSpec>> {
         let d: Def = ctx.def()?;
         super::require(

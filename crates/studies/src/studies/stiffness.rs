@@ -157,6 +157,10 @@ fn gap_case(ctx: &Ctx, d: &Def, rec: &str, cr: f64, k: f64) -> CaseSpec {
 }
 
 impl Study for Stiffness {
+    fn takes_record_table(&self) -> bool {
+        true
+    }
+
     fn cases(&self, ctx: &Ctx) -> Result<Vec<CaseSpec>> {
         let d: Def = ctx.def()?;
         let g = grid(ctx, &d)?;

@@ -488,6 +488,10 @@ fn crossing(pts: &[(f64, f64)], level: f64) -> Option<f64> {
 }
 
 impl Study for Yielding {
+    fn takes_record_table(&self) -> bool {
+        true
+    }
+
     fn cases(&self, ctx: &Ctx) -> Result<Vec<CaseSpec>> {
         let d: Def = ctx.def()?;
         validate(ctx, &d)?;
