@@ -13,6 +13,30 @@
 //! - [`testing`]: small scenes with closed-form answers shared by tests and benchmarks.
 //!
 //! SI units throughout: kg, N/m, m, s, m/s².
+//!
+//! # Example
+//!
+//! The paper's scene: each building is calibrated to two target frequencies (its first two
+//! modes in the impact direction, paper Table 1), which its modes reproduce:
+//!
+//! ```
+//! use structure::Scene;
+//! use std::path::Path;
+//!
+//! let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../studies/paper/scene.toml");
+//! let scene = Scene::from_file(&file)?;
+//! let modes = scene.buildings[0].modes()?;
+//! let f = modes.frequencies_hz();
+//! assert_eq!(f.len(), 15);
+//! // To the calibration's root tolerance (1e-14 on f₂/f₁), well inside 1e-12:
+//! assert!((f[0] / 0.67 - 1.0).abs() < 1e-12 && (f[1] / 2.23 - 1.0).abs() < 1e-12);
+//! // Mass-normalised: φ₁ᵀ M φ₁ = 1 (kg·(kg^-½)² = 1).
+//! let m1: f64 = (0..15).map(|i| modes.masses[i] * modes.phi[(i, 0)].powi(2)).sum();
+//! assert!((m1 - 1.0).abs() < 1e-12);
+//! println!("building 1: {:.3} and {:.3} Hz, record PGA {:.3} g",
+//!     f[0], f[1], scene.ground.as_ref().unwrap().pga() / structure::G);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 
 pub mod ground;
 pub mod model;
