@@ -237,6 +237,7 @@ fn wall_contact(gap: f64, cr: f64) -> Contact {
         gap,
         restitution: cr,
         wall: true,
+        entry: 0,
     }
 }
 
@@ -430,6 +431,7 @@ fn pushed(persistent: bool) -> Scene {
         gap: 0.05,
         restitution: 0.5,
         wall: false,
+        entry: 0,
     };
     let mut s = free_scene(vec![a, b], vec![c], 20.0);
     s.ground = Some(GroundMotion::new("push", 0.01, vec![-2.0; 2001]).unwrap());
@@ -574,7 +576,7 @@ fn two_sticks(cr: f64, duration: f64) -> Scene {
     a.initial_velocity = vec![0.1, 0.2, 0.3, 0.4, 0.5];
     let mut b = Building::new("b", vec![1.3e6; 6], vec![9.0e8; 6], 0.0);
     b.initial_velocity = vec![-0.05, -0.1, -0.15, -0.2, -0.25, -0.3];
-    let contact = |dof: usize, gap: f64| Contact {
+    let contact = |entry: usize, dof: usize, gap: f64| Contact {
         left: 0,
         left_dof: dof,
         right: 1,
@@ -582,10 +584,11 @@ fn two_sticks(cr: f64, duration: f64) -> Scene {
         gap,
         restitution: cr,
         wall: false,
+        entry,
     };
     free_scene(
         vec![a, b],
-        vec![contact(4, 0.02), contact(2, 0.015)],
+        vec![contact(0, 4, 0.02), contact(1, 2, 0.015)],
         duration,
     )
 }

@@ -20,6 +20,7 @@ fn pushed(persistent: bool) -> structure::Scene {
         gap: 0.05,
         restitution: 0.5,
         wall: false,
+        entry: 0,
     };
     let mut s = free_scene(vec![a, b], vec![c], 20.0);
     // Static: u_soft = 2/w1² = 0.20 m, u_stiff = 0.013 m: the floors are held together.

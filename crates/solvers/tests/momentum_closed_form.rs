@@ -70,6 +70,7 @@ fn two_sticks(cr: f64, duration: f64) -> structure::Scene {
         gap: 0.02,
         restitution: cr,
         wall: false,
+        entry: 0,
     };
     let c2 = Contact {
         left: 0,
@@ -79,6 +80,7 @@ fn two_sticks(cr: f64, duration: f64) -> structure::Scene {
         gap: 0.015,
         restitution: cr,
         wall: false,
+        entry: 1,
     };
     free_scene(vec![a, b], vec![c, c2], duration)
 }
@@ -147,6 +149,7 @@ fn truncated_paper_variant_violates_restitution_consistent_does_not() {
             gap: 0.05,
             restitution: 0.65,
             wall: false,
+            entry: 0,
         };
         let mut s = free_scene(vec![a, b], vec![c], 5.0);
         s.momentum.modes = Some(3);

@@ -353,6 +353,7 @@ fn draw(seed: u64) -> Case {
                 gap,
                 restitution: cr,
                 wall: false,
+                entry: contacts.len(),
             });
         }
     }
@@ -368,6 +369,7 @@ fn draw(seed: u64) -> Case {
             gap: r.log_uniform(0.005, 0.10),
             restitution: restitution(&mut r),
             wall: true,
+            entry: contacts.len(),
         });
     }
     let g = ground(&mut r);

@@ -28,6 +28,7 @@ fn wall_contact(dof: usize, gap: f64, cr: f64) -> Contact {
         gap,
         restitution: cr,
         wall: true,
+        entry: 0,
     }
 }
 

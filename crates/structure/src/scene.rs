@@ -198,6 +198,14 @@ pub struct Contact {
     /// contact `right` and `right_dof` repeat `left` and `left_dof` (valid indices, never a
     /// second body): code that reads the right side must check `wall` first.
     pub wall: bool,
+    /// The scene file's `[[contacts]]` entry this contact was resolved from (0-based index
+    /// in the file's `contacts` array): a `floors = "aligned"` entry expands to several
+    /// contacts, all with its index. Bookkeeping only (reports group contacts by it,
+    /// [`Scene::contact_entries`]); no solver reads it. A contact built in code has no file
+    /// entry: give it an entry of its own, by convention its index in [`Scene::contacts`]
+    /// (what `structure::testing` does); contacts that share a value are reported as one
+    /// entry.
+    pub entry: usize,
 }
 
 /// The name that makes a contact's right side a rigid wall (`right = "wall"`); no building
@@ -235,13 +243,9 @@ pub struct Scene {
     /// when not given (then floor i of one building faces floor i of the other). An entry
     /// missing for a building index (a scene built in code) counts as `None`.
     pub story_heights: Vec<Option<Vec<f64>>>,
+    /// The resolved contacts, in the order of the scene file's entries (an aligned entry's
+    /// contacts roof first); each knows its entry ([`Contact::entry`]).
     pub contacts: Vec<Contact>,
-    /// For each of [`Scene::contacts`], the index of the scene file's `[[contacts]]` entry it
-    /// comes from: a `floors = "aligned"` entry expands to several contacts, all with its
-    /// index. Read it through [`Scene::contact_source`]: a scene built in code may leave it
-    /// empty (contact i then comes from entry i), and a contact past its end (added in code)
-    /// counts as an entry of its own.
-    pub contact_sources: Vec<usize>,
     /// Ground acceleration (m/s², already scaled); `None` = free vibration.
     pub ground: Option<GroundMotion>,
     pub ground_source: Option<GroundMotionSource>,
@@ -346,27 +350,13 @@ fn facings(buildings: &[Building], heights: &[Option<Vec<f64>>], a: usize, b: us
 }
 
 impl Scene {
-    /// The scene file's `[[contacts]]` entry (0-based) contact `i` comes from
-    /// ([`Scene::contact_sources`]). A contact past the end of that list is an entry of its
-    /// own, numbered on from the largest one listed: with an empty list, contact i comes from
-    /// entry i.
-    pub fn contact_source(&self, i: usize) -> usize {
-        match self.contact_sources.get(i) {
-            Some(&entry) => entry,
-            None => match self.contact_sources.iter().max() {
-                Some(&most) => most + 1 + (i - self.contact_sources.len()),
-                None => i,
-            },
-        }
-    }
-
-    /// The contacts grouped by the scene file's entry they come from
-    /// ([`Scene::contact_source`]): (entry, its contacts' indices in [`Scene::contacts`]), in
-    /// the order of each entry's first contact.
+    /// The contacts grouped by the scene file's entry they come from ([`Contact::entry`]):
+    /// (entry, its contacts' indices in [`Scene::contacts`]), in the order of each entry's
+    /// first contact.
     pub fn contact_entries(&self) -> Vec<(usize, Vec<usize>)> {
         let mut entries: Vec<(usize, Vec<usize>)> = Vec::new();
-        for i in 0..self.contacts.len() {
-            let e = self.contact_source(i);
+        for (i, c) in self.contacts.iter().enumerate() {
+            let e = c.entry;
             match entries.iter_mut().find(|(k, _)| *k == e) {
                 Some((_, v)) => v.push(i),
                 None => entries.push((e, vec![i])),
@@ -1195,8 +1185,6 @@ fn validate(
     }
 
     let mut contacts: Vec<Contact> = Vec::with_capacity(raw.contacts.len());
-    // The file entry (`contacts[i]`) each contact comes from (an aligned entry gives many).
-    let mut entry_of: Vec<usize> = Vec::with_capacity(raw.contacts.len());
     for (ci, rc) in raw.contacts.into_iter().enumerate() {
         let key = |k: &str| format!("contacts[{ci}].{k}");
         let find = |name: &str, k: &str| {
@@ -1385,10 +1373,10 @@ fn validate(
                     || (c.left, c.left_dof, c.right, c.right_dof)
                         == (right, right_dof, left, left_dof)
             }) {
-                let by = if entry_of[other] == ci {
+                let by = if contacts[other].entry == ci {
                     "this entry".to_string()
                 } else {
-                    format!("contacts[{}]", entry_of[other])
+                    format!("contacts[{}]", contacts[other].entry)
                 };
                 return Err(invalid(
                     format!("contacts[{ci}]"),
@@ -1431,8 +1419,8 @@ fn validate(
                 gap: rc.gap,
                 restitution: rc.restitution,
                 wall,
+                entry: ci,
             });
-            entry_of.push(ci);
         }
     }
 
@@ -1756,7 +1744,6 @@ fn validate(
         buildings,
         story_heights,
         contacts,
-        contact_sources: entry_of,
         ground,
         ground_source,
         duration,

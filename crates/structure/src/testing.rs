@@ -6,8 +6,8 @@ use crate::ground::GroundMotion;
 use crate::model::Building;
 use crate::scene::{Contact, GapElementOptions, Limits, MomentumOptions, Scene};
 
-/// A scene without ground motion built in code. Its `contact_sources` is empty: contact i
-/// counts as the scene's entry i ([`Scene::contact_source`]).
+/// A scene without ground motion built in code. The contacts are kept as given, their
+/// [`Contact::entry`] too: the helpers below give contact i entry i (each its own entry).
 pub fn free_scene(buildings: Vec<Building>, contacts: Vec<Contact>, duration: f64) -> Scene {
     Scene {
         name: "test".into(),
@@ -15,7 +15,6 @@ pub fn free_scene(buildings: Vec<Building>, contacts: Vec<Contact>, duration: f6
         story_heights: vec![None; buildings.len()],
         buildings,
         contacts,
-        contact_sources: Vec::new(),
         ground: None,
         ground_source: None,
         duration,
@@ -52,6 +51,7 @@ pub fn two_oscillators(
         gap,
         restitution: cr,
         wall: false,
+        entry: 0,
     };
     free_scene(vec![a, b], vec![c], duration)
 }
@@ -128,6 +128,7 @@ pub fn stereomechanics(cr: f64) -> Scene {
         gap: 1e-6,
         restitution: cr,
         wall: false,
+        entry: 0,
     };
     free_scene(vec![a, b], vec![c], 2e-6)
 }

@@ -1231,39 +1231,53 @@ fn a_two_column_file_with_dt_and_no_format_is_refused_naming_the_line() {
 }
 
 // ---------------------------------------------------------------------------------------
-// Contact sources: the `[[contacts]]` entry of every contact
+// Contact entries: the `[[contacts]]` entry of every contact (`Contact::entry`)
 // ---------------------------------------------------------------------------------------
+
+fn entries(s: &Scene) -> Vec<usize> {
+    s.contacts.iter().map(|c| c.entry).collect()
+}
 
 #[test]
 fn the_aligned_paper_scene_maps_every_contact_to_entry_0() {
     let s = structure::testing::paper_scene_aligned(&[]);
     assert_eq!(s.contacts.len(), 15);
-    assert_eq!(s.contact_sources, vec![0; 15]);
-    assert!((0..15).all(|i| s.contact_source(i) == 0));
-    // A contact added in code after them is an entry of its own.
+    assert_eq!(entries(&s), vec![0; 15]);
+    assert_eq!(s.contact_entries(), vec![(0, (0..15).collect::<Vec<_>>())]);
+    // A contact added in code after them, given an entry of its own, is reported as one.
     let mut t = s.clone();
     let mut extra = t.contacts[0].clone();
     extra.left_dof = 0;
     extra.right_dof = 0;
+    extra.entry = 1;
     t.contacts.push(extra);
-    assert_eq!(t.contact_source(15), 1);
+    assert_eq!(t.contacts[15].entry, 1);
     assert_eq!(t.contact_entries().len(), 2);
     assert_eq!(t.contact_entries()[1], (1, vec![15]));
-    // Entries listed out of order (a scene built in code): the one after them is numbered
-    // on from the largest.
+    // Clearing the contacts clears their entries: nothing is left to keep in step.
+    let mut none = t.clone();
+    none.contacts.clear();
+    assert!(none.contact_entries().is_empty());
+    // Entries out of order (a scene built in code): grouped in order of first appearance.
     let mut u = t.clone();
     u.contacts.truncate(2);
-    u.contact_sources = vec![1, 0];
-    u.contacts.push(u.contacts[0].clone());
-    assert_eq!(u.contact_source(2), 2);
+    u.contacts[0].entry = 1;
+    u.contacts[1].entry = 0;
+    let mut third = u.contacts[0].clone();
+    third.entry = 2;
+    u.contacts.push(third);
+    assert_eq!(entries(&u), vec![1, 0, 2]);
     assert_eq!(
         u.contact_entries(),
         vec![(1, vec![0]), (0, vec![1]), (2, vec![2])]
     );
+    // Two contacts of one entry that are not next to each other are still one group.
+    u.contacts[2].entry = 1;
+    assert_eq!(u.contact_entries(), vec![(1, vec![0, 2]), (0, vec![1])]);
 }
 
 #[test]
-fn contact_sources_follow_the_entries() {
+fn contact_entries_follow_the_file() {
     // Entry 0: aligned (two contacts, roofs first); entry 1: floor 1 of `b` against a wall.
     let text = TINY
         .replace("left_floor = 2\n", "floors = \"aligned\"\n")
@@ -1275,11 +1289,8 @@ fn contact_sources_follow_the_entries() {
         );
     let s = load_str(&text, &[]).unwrap();
     assert_eq!(s.contacts.len(), 3);
-    assert_eq!(s.contact_sources, vec![0, 0, 1]);
-    assert_eq!(
-        (0..3).map(|i| s.contact_source(i)).collect::<Vec<_>>(),
-        vec![0, 0, 1]
-    );
+    assert_eq!(entries(&s), vec![0, 0, 1]);
+    assert_eq!(s.contact_entries(), vec![(0, vec![0, 1]), (1, vec![2])]);
     assert!(s.contacts[2].wall);
     // Two plain entries: one contact each.
     let two = TINY.replace(
@@ -1288,19 +1299,18 @@ fn contact_sources_follow_the_entries() {
          gap = 0.02\n\n[analysis]",
     );
     let s = load_str(&two, &[]).unwrap();
-    assert_eq!(s.contact_sources, vec![0, 1]);
-    assert_eq!((s.contact_source(0), s.contact_source(1)), (0, 1));
+    assert_eq!(entries(&s), vec![0, 1]);
+    assert_eq!(s.contact_entries(), vec![(0, vec![0]), (1, vec![1])]);
     assert_eq!(s.contacts[1].gap, 0.02);
 }
 
 #[test]
-fn a_scene_built_in_code_counts_contact_i_as_entry_i() {
+fn a_scene_built_in_code_gives_each_contact_its_own_entry() {
     let s = structure::testing::two_oscillators(1.0, 1.0, 1.0, 1.0, 1.0, 0.1, 1.0, 1.0);
-    assert!(s.contact_sources.is_empty());
-    assert_eq!(
-        (0..3).map(|i| s.contact_source(i)).collect::<Vec<_>>(),
-        vec![0, 1, 2]
-    );
+    assert_eq!(entries(&s), vec![0]);
+    assert_eq!(s.contact_entries(), vec![(0, vec![0])]);
+    let s = structure::testing::stereomechanics(0.5);
+    assert_eq!(entries(&s), vec![0]);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -1316,7 +1326,7 @@ fn an_aligned_entry_becomes_a_roof_contact_with_set() {
     ]);
     assert_eq!(s.contacts.len(), 1);
     assert_eq!((s.contacts[0].left_dof, s.contacts[0].right_dof), (14, 14));
-    assert_eq!(s.contact_sources, vec![0]);
+    assert_eq!(entries(&s), vec![0]);
     let roof = structure::testing::paper_scene(&[]);
     assert_eq!(s.contacts, roof.contacts);
     // Without removing `floors`, both ways of naming the floors are refused.

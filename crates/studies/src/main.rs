@@ -799,7 +799,6 @@ fn run(cli: Cli) -> Result<()> {
             } else {
                 let mut free = scene.clone();
                 free.contacts.clear();
-                free.contact_sources.clear();
                 let base = solvers::run(&free, method, None).with_context(|| {
                     format!(
                         "{}: {method} analysis without contact failed",

@@ -145,7 +145,8 @@ fn every_floor(scene: &Scene, gap: f64, cr: f64) -> Vec<Contact> {
         .min(scene.buildings[1].n_floors());
     std::iter::once(n - 1)
         .chain(0..n - 1)
-        .map(|dof| Contact {
+        .enumerate()
+        .map(|(entry, dof)| Contact {
             left: 0,
             left_dof: dof,
             right: 1,
@@ -153,6 +154,7 @@ fn every_floor(scene: &Scene, gap: f64, cr: f64) -> Vec<Contact> {
             gap,
             restitution: cr,
             wall: false,
+            entry,
         })
         .collect()
 }
