@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
-use crate::ground::{GroundMotion, RecordError, RecordFormat, Units};
+use crate::ground::{FormatRefusal, GroundMotion, RecordChoice, RecordError, RecordFormat, Units};
 use crate::model::{
     calibrate_first_frequency, calibrate_two_frequencies, Building, Damping, ModelError, StoryLaw,
 };
@@ -1437,70 +1437,62 @@ fn validate(
                     )
                 })?,
             };
-            // Without `format`: AT2 for a name ending in .at2 (any case), else one-column
-            // when `dt` is given (only a one-column record takes it, as `pound record FILE
+            let kind = match &g.format {
+                None => None,
+                Some(name) => {
+                    Some(crate::ground::FormatKind::from_name(name).ok_or_else(|| {
+                        invalid(
+                            key("format"),
+                            format!("`{name}`: expected \"at2\", \"two-column\" or \"one-column\""),
+                        )
+                    })?)
+                }
+            };
+            // The one rule ([`RecordFormat::infer`]): without `format`, AT2 for a name ending
+            // in .at2 (any case), else one-column when `dt` is given (as `pound record FILE
             // --dt S` reads it), else two-column.
-            let fmt_name = g.format.clone().unwrap_or_else(|| {
-                if g.file.to_ascii_lowercase().ends_with(".at2") {
-                    "at2".into()
-                } else if g.dt.is_some() {
-                    "one-column".into()
-                } else {
-                    "two-column".into()
-                }
-            });
-            let format = match fmt_name.as_str() {
-                "at2" => {
-                    if g.units.is_some() || g.dt.is_some() {
-                        let present: Vec<&str> =
-                            [("units", g.units.is_some()), ("dt", g.dt.is_some())]
-                                .into_iter()
-                                .filter_map(|(k, given)| given.then_some(k))
-                                .collect();
-                        return Err(invalid(
-                            key(present[0]),
-                            format!(
-                                "AT2 records state their units (header line 3) and dt (line 4); remove `{}`",
-                                present.join("` and `")
-                            ),
-                        ));
-                    }
-                    RecordFormat::At2
-                }
-                "two-column" => {
-                    if g.dt.is_some() {
-                        return Err(invalid(
-                            key("dt"),
+            let choice = RecordFormat::infer(Path::new(&g.file), kind, g.dt, units);
+            let at2 = matches!(
+                choice,
+                Ok(RecordChoice {
+                    format: RecordFormat::At2,
+                    ..
+                }) | Err(FormatRefusal::DtWithAt2 { .. })
+            );
+            if at2 && (g.units.is_some() || g.dt.is_some()) {
+                let present: Vec<&str> = [("units", g.units.is_some()), ("dt", g.dt.is_some())]
+                    .into_iter()
+                    .filter_map(|(k, given)| given.then_some(k))
+                    .collect();
+                return Err(invalid(
+                    key(present[0]),
+                    format!(
+                        "AT2 records state their units (header line 3) and dt (line 4); remove `{}`",
+                        present.join("` and `")
+                    ),
+                ));
+            }
+            let choice = choice.map_err(|refusal| {
+                invalid(
+                    key("dt"),
+                    match refusal {
+                        FormatRefusal::DtWithTwoColumn { .. } => {
                             "format \"two-column\": a two-column record takes its dt from the \
                              time column; remove `dt` (or, for a file of acceleration values \
                              only, give format \"one-column\" or no format)"
-                                .into(),
-                        ));
-                    }
-                    RecordFormat::TwoColumn { units }
-                }
-                "one-column" => {
-                    let dt = g.dt.ok_or_else(|| {
-                        invalid(
-                            key("dt"),
-                            "missing: a one-column record needs `dt` (s)".into(),
-                        )
-                    })?;
-                    if !(dt.is_finite() && dt > 0.0) {
-                        return Err(invalid(
-                            key("dt"),
-                            format!("{dt}: expected a time step > 0 (s)"),
-                        ));
-                    }
-                    RecordFormat::OneColumn { dt, units }
-                }
-                other => {
-                    return Err(invalid(
-                        key("format"),
-                        format!("`{other}`: expected \"at2\", \"two-column\" or \"one-column\""),
-                    ))
-                }
-            };
+                                .into()
+                        }
+                        FormatRefusal::OneColumnWithoutDt => {
+                            "missing: a one-column record needs `dt` (s)".into()
+                        }
+                        FormatRefusal::BadDt { dt } => {
+                            format!("{dt}: expected a time step > 0 (s)")
+                        }
+                        // Answered above, with `units` if given too.
+                        FormatRefusal::DtWithAt2 { .. } => refusal.to_string(),
+                    },
+                )
+            })?;
             if g.pga.is_some() && g.scale.is_some() {
                 return Err(invalid(
                     key("pga"),
@@ -1542,22 +1534,24 @@ fn validate(
                     format!("record file {} {problem}{relative}", path.display()),
                 ));
             }
-            // One-column only because `dt` came without `format`: a table of two or more
-            // values per line is refused rather than read value after value.
-            let inferred = g.format.is_none() && matches!(format, RecordFormat::OneColumn { .. });
-            if inferred {
-                crate::ground::record::check_inferred_one_column(
-                    &path,
-                    "give `ground_motion.format = \"two-column\"` without `dt` to read time and \
-                     acceleration, or `format = \"one-column\"` to read every value in order",
-                )
-                // Named under `dt`: it is what chose the one-column format here.
-                .map_err(|e| invalid(key("dt"), e.to_string()))?;
-            }
-            let rec = GroundMotion::load(&path, &format).map_err(|source| SceneError::Record {
-                file: origin.to_string(),
-                source,
+            // One-column only because `dt` came without `format` (`choice.inferred`): a table
+            // of two or more values per line is refused rather than read value after value,
+            // named under `dt`, which is what chose the one-column format here.
+            let rec = GroundMotion::load_choice(&path, &choice).map_err(|source| match source {
+                RecordError::InferredOneColumn { .. } => invalid(
+                    key("dt"),
+                    format!(
+                        "{source}: give `ground_motion.format = \"two-column\"` without `dt` to \
+                         read time and acceleration, or `format = \"one-column\"` to read every \
+                         value in order"
+                    ),
+                ),
+                source => SceneError::Record {
+                    file: origin.to_string(),
+                    source,
+                },
             })?;
+            let format = choice.format;
             let factor = match (g.pga, g.scale) {
                 (Some(p), _) => {
                     let pga = rec.pga();
@@ -1572,28 +1566,25 @@ fn validate(
                 (None, Some(s)) => s,
                 (None, None) => 1.0,
             };
-            let scaled = match g.pga {
-                Some(p) => rec.scaled_to_pga(p),
-                None => rec.scaled(factor),
-            };
             // A factor near the largest f64 overflows the record: refused here, not left to
-            // stop a solver with a non-finite state.
-            if let Some(i) = scaled.accel.iter().position(|a| !a.is_finite()) {
+            // stop a solver with a non-finite state. (With `pga`, `factor` is the one
+            // `scaled_to_pga` would use.)
+            let scaled = rec.checked_scaled(factor).map_err(|e| {
                 let (k, v) = match g.pga {
                     Some(p) => ("pga", format!("{p:e} g")),
                     None => ("scale", format!("{factor:e}")),
                 };
-                return Err(invalid(
+                invalid(
                     key(k),
                     format!(
                         "{v} scales sample {} of {} ({:e} m/s^2) beyond the range of floating \
                          point (expected a factor that leaves every acceleration finite)",
-                        i + 1,
+                        e.sample,
                         path.display(),
-                        rec.accel[i]
+                        e.value
                     ),
-                ));
-            }
+                )
+            })?;
             (
                 Some(scaled),
                 Some(GroundMotionSource {

@@ -6,7 +6,10 @@ use std::path::{Path, PathBuf};
 use proptest::prelude::*;
 use structure::ground::nigam_jennings::{acceleration, Propagator};
 use structure::ground::spectrum::{default_periods, response_spectrum};
-use structure::ground::{GroundMotion, RecordError, RecordFormat, Units};
+use structure::ground::{
+    FormatKind, FormatRefusal, GroundMotion, RecordChoice, RecordError, RecordFormat,
+    ScaleOverflow, Units,
+};
 use structure::G;
 
 fn data(name: &str) -> PathBuf {
@@ -1076,10 +1079,9 @@ fn values_per_line_counts_as_the_readers_split() {
 /// needs three rows of uniform times) and would be read value after value.
 #[test]
 fn an_inferred_one_column_refuses_a_table_of_any_step() {
-    use structure::ground::record::check_inferred_one_column;
     let dir = std::env::temp_dir().join(format!("pound-inferred-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let advice = "give the format";
+    let inferred = |f: &Path| RecordFormat::infer(f, None, Some(0.01), Units::G).unwrap();
     for (name, text, values) in [
         ("two-rows.txt", "0 0.1\n0.01 0.2\n", 2),
         (
@@ -1091,7 +1093,7 @@ fn an_inferred_one_column_refuses_a_table_of_any_step() {
     ] {
         let f = dir.join(name);
         std::fs::write(&f, text).unwrap();
-        let e = check_inferred_one_column(&f, advice).unwrap_err();
+        let e = GroundMotion::load_choice(&f, &inferred(&f)).unwrap_err();
         assert!(
             matches!(&e, RecordError::InferredOneColumn { line: 1, values: v, .. } if *v == values),
             "{name}: {e:?}"
@@ -1101,7 +1103,6 @@ fn an_inferred_one_column_refuses_a_table_of_any_step() {
             &[
                 &format!("{name} line 1: every line of numbers holds {values} values"),
                 "read as one-column because a time step was given without a format",
-                advice,
             ],
         );
         // Read as one-column on purpose (an explicit format), it is read value after value.
@@ -1125,9 +1126,272 @@ fn an_inferred_one_column_refuses_a_table_of_any_step() {
     ] {
         let f = dir.join(name);
         std::fs::write(&f, text).unwrap();
-        assert!(check_inferred_one_column(&f, advice).is_ok(), "{name}");
+        let g = GroundMotion::load_choice(&f, &inferred(&f)).unwrap();
+        assert_eq!(g.npts(), 3, "{name}");
     }
-    // A file that cannot be read is left to the reader.
-    assert!(check_inferred_one_column(&dir.join("missing.txt"), advice).is_ok());
+    // A file that cannot be read: the reader says why.
+    let missing = dir.join("missing.txt");
+    let e = GroundMotion::load_choice(&missing, &inferred(&missing)).unwrap_err();
+    assert!(matches!(e, RecordError::Io { .. }), "{e:?}");
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+// ---------------------------------------------------------------------------------------
+// The one rule choosing a record file's format: RecordFormat::infer
+// ---------------------------------------------------------------------------------------
+
+#[test]
+fn infer_without_a_format_follows_the_name_then_the_time_step() {
+    let g = Units::G;
+    let cm = Units::CentimetersPerSecond2;
+    // `.at2` in any case: AT2 (its units are the header's, whatever `units` says).
+    for name in ["r.at2", "r.AT2", "dir/r.At2", "r.aT2"] {
+        assert_eq!(
+            RecordFormat::infer(Path::new(name), None, None, cm),
+            Ok(RecordChoice {
+                format: RecordFormat::At2,
+                inferred: false
+            }),
+            "{name}"
+        );
+    }
+    // Only the extension counts: not a name merely containing it, nor a hidden file `.at2`.
+    for name in ["r.at2.txt", "at2", "r_at2", ".at2", "r.at22"] {
+        assert_eq!(
+            RecordFormat::infer(Path::new(name), None, None, g)
+                .unwrap()
+                .format,
+            RecordFormat::TwoColumn { units: g },
+            "{name}"
+        );
+    }
+    // A time step alone: one-column, inferred.
+    assert_eq!(
+        RecordFormat::infer(Path::new("r.txt"), None, Some(0.02), cm),
+        Ok(RecordChoice {
+            format: RecordFormat::OneColumn {
+                dt: 0.02,
+                units: cm
+            },
+            inferred: true
+        })
+    );
+    // The same given on purpose: not inferred.
+    assert_eq!(
+        RecordFormat::infer(
+            Path::new("r.txt"),
+            Some(FormatKind::OneColumn),
+            Some(0.02),
+            cm
+        ),
+        Ok(RecordChoice {
+            format: RecordFormat::OneColumn {
+                dt: 0.02,
+                units: cm
+            },
+            inferred: false
+        })
+    );
+    // A format given wins over the name.
+    assert_eq!(
+        RecordFormat::infer(Path::new("r.AT2"), Some(FormatKind::TwoColumn), None, cm)
+            .unwrap()
+            .format,
+        RecordFormat::TwoColumn { units: cm }
+    );
+    assert_eq!(
+        RecordFormat::infer(Path::new("r.txt"), Some(FormatKind::At2), None, g)
+            .unwrap()
+            .format,
+        RecordFormat::At2
+    );
+}
+
+#[test]
+fn infer_refuses_each_misfit_with_its_data() {
+    let g = Units::G;
+    let at2 = Path::new("r.AT2");
+    let txt = Path::new("r.txt");
+    // A time step with AT2, chosen by the name or given.
+    assert_eq!(
+        RecordFormat::infer(at2, None, Some(0.01), g),
+        Err(FormatRefusal::DtWithAt2 {
+            dt: 0.01,
+            by_name: true
+        })
+    );
+    assert_eq!(
+        RecordFormat::infer(txt, Some(FormatKind::At2), Some(0.01), g),
+        Err(FormatRefusal::DtWithAt2 {
+            dt: 0.01,
+            by_name: false
+        })
+    );
+    // The AT2 refusal comes before the time step's own check.
+    assert_eq!(
+        RecordFormat::infer(at2, None, Some(-1.0), g),
+        Err(FormatRefusal::DtWithAt2 {
+            dt: -1.0,
+            by_name: true
+        })
+    );
+    // A time step with two-column (given: a time step alone means one-column).
+    assert_eq!(
+        RecordFormat::infer(txt, Some(FormatKind::TwoColumn), Some(0.01), g),
+        Err(FormatRefusal::DtWithTwoColumn { dt: 0.01 })
+    );
+    // One-column without a time step.
+    assert_eq!(
+        RecordFormat::infer(at2, Some(FormatKind::OneColumn), None, g),
+        Err(FormatRefusal::OneColumnWithoutDt)
+    );
+    // A time step that is not finite and > 0, inferred or given.
+    for dt in [0.0, -0.01, f64::INFINITY] {
+        for format in [None, Some(FormatKind::OneColumn)] {
+            assert_eq!(
+                RecordFormat::infer(txt, format, Some(dt), g),
+                Err(FormatRefusal::BadDt { dt }),
+                "{dt} {format:?}"
+            );
+        }
+    }
+    let nan = RecordFormat::infer(txt, None, Some(f64::NAN), g).unwrap_err();
+    assert!(
+        matches!(nan, FormatRefusal::BadDt { dt } if dt.is_nan()),
+        "{nan:?}"
+    );
+    // The messages name no caller's setting, only what is wrong.
+    for (e, parts) in [
+        (
+            FormatRefusal::DtWithAt2 {
+                dt: 0.01,
+                by_name: true,
+            },
+            &["0.01 s", "AT2", "ends in .at2", "line 4"][..],
+        ),
+        (
+            FormatRefusal::DtWithTwoColumn { dt: 0.01 },
+            &["0.01 s", "two-column", "time column"][..],
+        ),
+        (
+            FormatRefusal::OneColumnWithoutDt,
+            &["one-column", "time step"][..],
+        ),
+        (FormatRefusal::BadDt { dt: 0.0 }, &["> 0", "found 0"][..]),
+    ] {
+        let m = e.to_string();
+        for p in parts {
+            assert!(m.contains(p), "{m:?} lacks {p:?}");
+        }
+        assert!(!m.contains("--") && !m.contains('`'), "{m}");
+    }
+}
+
+#[test]
+fn format_kind_names_round_trip() {
+    for k in [
+        FormatKind::At2,
+        FormatKind::TwoColumn,
+        FormatKind::OneColumn,
+    ] {
+        assert_eq!(FormatKind::from_name(k.name()), Some(k));
+    }
+    assert_eq!(FormatKind::from_name("AT2"), None);
+    assert_eq!(FormatKind::from_name("two_column"), None);
+    assert_eq!(
+        RecordFormat::OneColumn {
+            dt: 0.1,
+            units: Units::G
+        }
+        .kind(),
+        FormatKind::OneColumn
+    );
+}
+
+/// The table refusal of an inferred one-column read is made on the text being parsed (the
+/// bytes `load_choice` read once), not on a second read of the file: `parse` refuses the
+/// text itself, with no file at all.
+#[test]
+fn the_inferred_refusal_is_made_on_the_text_parsed() {
+    let choice = RecordFormat::infer(Path::new("t.txt"), None, Some(0.01), Units::G).unwrap();
+    let e = GroundMotion::parse("# t a\n0 0.1\n0.01 0.2\n", "t.txt", &choice).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            RecordError::InferredOneColumn {
+                line: 2,
+                values: 2,
+                ..
+            }
+        ),
+        "{e:?}"
+    );
+    // Given on purpose, the same text is read value after value.
+    let explicit = RecordChoice::explicit(choice.format);
+    let g = GroundMotion::parse("# t a\n0 0.1\n0.01 0.2\n", "t.txt", &explicit).unwrap();
+    assert_eq!(g.accel.len(), 4);
+    // `inferred` means nothing to the other formats.
+    let two = RecordChoice {
+        format: RecordFormat::TwoColumn { units: Units::G },
+        inferred: true,
+    };
+    let g = GroundMotion::parse("0 0.1\n0.01 0.2\n", "t.txt", &two).unwrap();
+    assert_eq!((g.accel.len(), g.dt), (2, 0.01));
+}
+
+/// The record memo keeps an inferred one-column read apart from an explicit one of the same
+/// file: the explicit read of a table succeeds and is remembered, and the inferred read
+/// after it is still refused (and the other way round, a refusal leaves nothing for the
+/// explicit read to trip on).
+#[test]
+fn the_memo_keeps_inferred_and_explicit_reads_apart() {
+    let dir = std::env::temp_dir().join(format!("pound-memo-inferred-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let f = dir.join("table.txt");
+    std::fs::write(&f, "0 0.1\n0.01 0.2\n0.025 0.3\n").unwrap();
+    let inferred = RecordFormat::infer(&f, None, Some(0.01), Units::G).unwrap();
+    assert!(inferred.inferred);
+    let explicit = RecordChoice::explicit(inferred.format);
+    for _ in 0..2 {
+        let g = GroundMotion::load_choice(&f, &explicit).unwrap();
+        assert_eq!(g.npts(), 6);
+        let e = GroundMotion::load_choice(&f, &inferred).unwrap_err();
+        assert!(matches!(e, RecordError::InferredOneColumn { .. }), "{e:?}");
+    }
+    // `load` is the explicit read.
+    assert_eq!(GroundMotion::load(&f, &inferred.format).unwrap().npts(), 6);
+    // A one-value-per-line file read inferred is remembered apart too, and gives the same
+    // record as the explicit read.
+    let g = dir.join("values.txt");
+    std::fs::write(&g, "0.1\n0.2\n0.3\n").unwrap();
+    let a = GroundMotion::load_choice(&g, &inferred).unwrap();
+    let b = GroundMotion::load_choice(&g, &explicit).unwrap();
+    assert_eq!(a, b);
+    // load_bytes reads the bytes given, not the file.
+    let c = GroundMotion::load_bytes(&f, b"0.5\n0.6\n".to_vec(), &inferred).unwrap();
+    assert_eq!(c.accel, vec![0.5 * G, 0.6 * G]);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn checked_scaled_names_the_first_sample_that_overflows() {
+    let g = GroundMotion::new("x", 0.01, vec![1.0, -2.0, 4.0]).unwrap();
+    assert_eq!(g.checked_scaled(2.0).unwrap(), g.scaled(2.0));
+    let e = g.checked_scaled(1e308).unwrap_err();
+    assert_eq!(
+        e,
+        ScaleOverflow {
+            factor: 1e308,
+            sample: 2,
+            value: -2.0
+        }
+    );
+    let m = e.to_string();
+    assert!(
+        m.contains("sample 2") && m.contains("beyond the range"),
+        "{m}"
+    );
+    // scaled_to_pga's factor, checked, is the same record.
+    let f = 0.5 * G / g.pga();
+    assert_eq!(g.checked_scaled(f).unwrap(), g.scaled_to_pga(0.5));
 }

@@ -17,7 +17,8 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 
 use solvers::{History, Method};
 use structure::ground::spectrum::{default_periods, response_spectrum};
-use structure::{GroundMotion, RecordFormat, Scene, Units};
+use structure::ground::{FormatKind, FormatRefusal};
+use structure::{GroundMotion, RecordError, RecordFormat, Scene, Units};
 use studies::{io, report};
 
 /// Every message on stderr goes through this `eprintln!`, which shadows std's: std's panics when
@@ -231,6 +232,16 @@ enum FormatArg {
     OneColumn,
 }
 
+impl FormatArg {
+    fn kind(self) -> FormatKind {
+        match self {
+            FormatArg::At2 => FormatKind::At2,
+            FormatArg::TwoColumn => FormatKind::TwoColumn,
+            FormatArg::OneColumn => FormatKind::OneColumn,
+        }
+    }
+}
+
 #[derive(Clone, Copy, ValueEnum)]
 enum MethodArg {
     Momentum,
@@ -343,153 +354,127 @@ fn input<E: std::fmt::Display>(e: E) -> anyhow::Error {
     anyhow::Error::new(InputError(e.to_string()))
 }
 
-/// Whether `path` is named like a PEER AT2 record (`*.at2`, any case).
-fn named_at2(path: &Path) -> bool {
-    path.extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("at2"))
-}
-
 /// The scene overrides that read `studies run --records` files as `--record-format` and
-/// `--record-dt` say: first the study scene's own `ground_motion.format`, `dt` and `units`
-/// removed (they describe its own record), so that without the options the format follows
-/// each file's extension, as [`check_user_records`] reads it.
-/// `--record-dt` alone means one-column, as `pound record FILE --dt S` does (refused when a
-/// file is named `*.at2`); with `--record-format at2` or `two-column` it is refused.
-fn record_overrides(
-    format: Option<FormatArg>,
-    dt: Option<f64>,
-    records: &[PathBuf],
-) -> Result<Vec<String>> {
-    if let Some(dt) = dt {
-        if !(dt.is_finite() && dt > 0.0) {
-            return Err(input(format!(
-                "--record-dt {dt}: expected a time step > 0 (s)"
-            )));
-        }
-        match format {
-            Some(f @ (FormatArg::At2 | FormatArg::TwoColumn)) => {
-                return Err(input(format!(
-                    "--record-dt {dt}: only a one-column record needs a time step, not \
-                    --record-format {} (AT2 records state theirs on line 4, two-column records \
-                    take it from the time column); remove --record-dt, or give --record-format \
-                    one-column",
-                    format_name(f)
-                )));
-            }
-            None => {
-                if let Some(r) = records.iter().find(|r| named_at2(r)) {
-                    return Err(input(format!(
-                        "--record-dt {dt}: {} is read as a PEER AT2 record, which states its time \
-                        step on line 4; remove --record-dt (or give --record-format one-column)",
-                        r.display()
-                    )));
-                }
-            }
-            Some(FormatArg::OneColumn) => {}
-        }
-    }
+/// `--record-dt` say (after [`check_user_records`] has accepted them): first the study
+/// scene's own `ground_motion.format`, `dt` and `units` removed (they describe its own
+/// record), so that without the options the format follows each file's extension, as
+/// [`check_user_records`] reads it; `--record-dt` alone means one-column, as
+/// [`RecordFormat::infer`] has it (the cases read it as given on purpose: the table check of
+/// an inferred one-column read is [`check_user_records`]'s).
+fn record_overrides(format: Option<FormatArg>, dt: Option<f64>) -> Vec<String> {
     // The study scene's own `format`, `dt` and `units` (for its own record) are removed, so
     // that the cases read every file as these options say, as [`check_user_records`] does.
-    let reset = [
+    let mut set = vec![
         "ground_motion.format=".to_string(),
         "ground_motion.dt=".to_string(),
         "ground_motion.units=".to_string(),
     ];
-    let name = match (format, dt) {
-        (None, None) => return Ok(reset.to_vec()),
-        (Some(FormatArg::OneColumn), None) => {
-            return Err(input(
-                "--record-format one-column: give the records' time step with --record-dt (s)",
-            ))
-        }
-        (Some(f), _) => format_name(f),
-        // --record-dt alone: one-column.
-        (None, Some(_)) => format_name(FormatArg::OneColumn),
+    let kind = match (format, dt) {
+        (None, None) => return set,
+        (Some(f), _) => f.kind(),
+        (None, Some(_)) => FormatKind::OneColumn,
     };
-    let mut set = reset.to_vec();
-    set.push(format!("ground_motion.format=\"{name}\""));
+    set.push(format!("ground_motion.format=\"{}\"", kind.name()));
     if let Some(dt) = dt {
         set.push(format!("ground_motion.dt={dt:?}"));
     }
-    Ok(set)
-}
-
-/// The scene's name of a record format.
-fn format_name(f: FormatArg) -> &'static str {
-    match f {
-        FormatArg::At2 => "at2",
-        FormatArg::TwoColumn => "two-column",
-        FormatArg::OneColumn => "one-column",
-    }
+    set
 }
 
 /// Reads every `studies run --records` file (units g: the studies scale each record to their
-/// PGA levels) in the format the cases will read it ([`record_overrides`], already checked),
-/// before anything runs, so that a record that cannot be read is refused up front, naming
-/// it, also with `--quick` (which runs the first record only). A file with one value per line
-/// read as two columns is told to give `--record-format one-column --record-dt S`.
+/// PGA levels) as [`RecordFormat::infer`] chooses from `--record-format`, `--record-dt` and
+/// its name, before anything runs: first the options are checked against every file's name
+/// (refusals phrased in the options), then each file is read once, so that a record that
+/// cannot be read is refused up front, naming it, also with `--quick` (which runs the first
+/// record only). A file with one value per line read as two columns is told to give
+/// `--record-format one-column --record-dt S`.
 fn check_user_records(
     records: &[PathBuf],
     format: Option<FormatArg>,
     dt: Option<f64>,
 ) -> Result<()> {
+    let mut choices = Vec::with_capacity(records.len());
     for r in records {
-        let (read, how) = match (format, dt) {
-            (Some(FormatArg::At2), _) => (RecordFormat::At2, "as AT2 (--record-format at2)".into()),
-            (Some(FormatArg::TwoColumn), _) => (
-                RecordFormat::TwoColumn { units: Units::G },
-                "as two columns (--record-format two-column)".to_string(),
-            ),
-            (_, Some(dt)) => (
-                RecordFormat::OneColumn {
-                    dt,
-                    units: Units::G,
-                },
-                format!("as one column with --record-dt {dt}"),
-            ),
-            (_, None) if named_at2(r) => (
-                RecordFormat::At2,
-                "as AT2 (its name ends in .at2)".to_string(),
-            ),
-            (_, None) => (
-                RecordFormat::TwoColumn { units: Units::G },
+        let choice = RecordFormat::infer(r, format.map(FormatArg::kind), dt, Units::G)
+            .map_err(|refusal| input(records_refusal(refusal, format, r)))?;
+        choices.push(choice);
+    }
+    for (r, choice) in records.iter().zip(&choices) {
+        let how = match (choice.format, format) {
+            (RecordFormat::At2, Some(_)) => "as AT2 (--record-format at2)".to_string(),
+            (RecordFormat::At2, None) => "as AT2 (its name ends in .at2)".to_string(),
+            (RecordFormat::TwoColumn { .. }, Some(_)) => {
+                "as two columns (--record-format two-column)".to_string()
+            }
+            (RecordFormat::TwoColumn { .. }, None) => {
                 "as two columns, time and acceleration (its name does not end in .at2 and no \
                 --record-format is given)"
-                    .to_string(),
-            ),
+                    .to_string()
+            }
+            (RecordFormat::OneColumn { dt, .. }, _) => {
+                format!("as one column with --record-dt {dt}")
+            }
         };
-        if let (None, Some(_)) = (format, dt) {
+        let read = |e: RecordError| input(format!("--records: {} (read {how}): {e}", r.display()));
+        // One read of the file: its bytes are parsed (through the record memo) and, when
+        // that fails, looked at for the hint below.
+        let bytes = structure::ground::record::read_bytes(r).map_err(read)?;
+        let e = match GroundMotion::load_bytes(r, bytes.clone(), choice) {
+            Ok(_) => continue,
+            Err(e) => e,
+        };
+        if let RecordError::InferredOneColumn { .. } = e {
             // One-column only because --record-dt came alone: a table is refused.
-            structure::ground::record::check_inferred_one_column(
-                r,
-                "give --record-format two-column without --record-dt to read time and \
-                 acceleration, or --record-format one-column to read every value in order",
-            )
-            .map_err(|e| input(format!("--records: {}: {e}", r.display())))?;
+            return Err(input(format!(
+                "--records: {}: {e}: give --record-format two-column without --record-dt to \
+                 read time and acceleration, or --record-format one-column to read every value \
+                 in order",
+                r.display()
+            )));
         }
-        let Err(e) = GroundMotion::load(r, &read) else {
-            continue;
-        };
         // The hint only for a file of one value on every line of numbers (not for a table
         // that fails for another reason, such as uneven times).
-        let one_column = matches!(read, RecordFormat::TwoColumn { .. })
-            && std::fs::read(r).is_ok_and(|b| {
-                matches!(
-                    structure::ground::record::values_per_line(&String::from_utf8_lossy(&b)),
-                    Some((1, _))
-                )
-            });
-        return Err(input(if one_column {
-            format!(
+        let one_column = matches!(choice.format, RecordFormat::TwoColumn { .. })
+            && matches!(
+                structure::ground::record::values_per_line(&String::from_utf8_lossy(&bytes)),
+                Some((1, _))
+            );
+        return Err(if one_column {
+            input(format!(
                 "--records: {} holds one value per line, a one-column record, but is read {how}: \
                 give --record-format one-column --record-dt S (S: its time step, s)",
                 r.display()
-            )
+            ))
         } else {
-            format!("--records: {} (read {how}): {e}", r.display())
-        }));
+            read(e)
+        });
     }
     Ok(())
+}
+
+/// A refusal of [`RecordFormat::infer`] for the `studies run --records` file `file`, in the
+/// options `--record-format` (`format`) and `--record-dt`.
+fn records_refusal(refusal: FormatRefusal, format: Option<FormatArg>, file: &Path) -> String {
+    match refusal {
+        FormatRefusal::BadDt { dt } => format!("--record-dt {dt}: expected a time step > 0 (s)"),
+        FormatRefusal::DtWithAt2 { dt, by_name: true } => format!(
+            "--record-dt {dt}: {} is read as a PEER AT2 record, which states its time step on \
+            line 4; remove --record-dt (or give --record-format one-column)",
+            file.display()
+        ),
+        FormatRefusal::DtWithAt2 { dt, by_name: false } | FormatRefusal::DtWithTwoColumn { dt } => {
+            format!(
+                "--record-dt {dt}: only a one-column record needs a time step, not \
+                --record-format {} (AT2 records state theirs on line 4, two-column records \
+                take it from the time column); remove --record-dt, or give --record-format \
+                one-column",
+                format.map_or("", |f| f.kind().name())
+            )
+        }
+        FormatRefusal::OneColumnWithoutDt => {
+            "--record-format one-column: give the records' time step with --record-dt (s)".into()
+        }
+    }
 }
 
 /// What [`implausible_pga`] asks to check of a record read with `pound record` or `spectrum`.
@@ -512,6 +497,8 @@ fn implausible_pga(g: &GroundMotion, check: &str) {
     }
 }
 
+/// The record of `pound record` / `spectrum`, read as [`RecordFormat::infer`] chooses from
+/// `--format`, `--dt`, `--units` and its name, refusals phrased in those flags.
 fn load_record(a: &RecordArgs) -> Result<GroundMotion> {
     let units: Option<Units> = match &a.units {
         None => None,
@@ -520,66 +507,47 @@ fn load_record(a: &RecordArgs) -> Result<GroundMotion> {
                 .map_err(|_| input(format!("--units `{u}`: expected g, m/s^2 or cm/s^2")))?,
         ),
     };
-    let is_at2 = a
-        .record
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("at2"));
-    let at2 = matches!(a.format, Some(FormatArg::At2)) || (a.format.is_none() && is_at2);
-    if at2 {
-        if a.dt.is_some() {
-            return Err(input(format!(
-                "--dt: {} is read as a PEER AT2 record, which states its time step on line 4; remove --dt (or give --format one-column)",
-                a.record.display()
-            )));
-        }
-        if let Some(u) = units {
-            // Agreeing with the header is harmless; contradicting it is refused.
-            let text = std::fs::read_to_string(&a.record).unwrap_or_default();
-            if let Some(h) = text
-                .lines()
-                .nth(2)
-                .and_then(structure::ground::record::at2_units)
-            {
-                if h != u {
-                    return Err(input(format!(
-                        "--units {u}: {} states its units on line 3 as {h}; remove --units",
-                        a.record.display()
-                    )));
-                }
+    let choice = RecordFormat::infer(
+        &a.record,
+        a.format.map(FormatArg::kind),
+        a.dt,
+        units.unwrap_or(Units::G),
+    )
+    .map_err(|refusal| match refusal {
+        FormatRefusal::DtWithAt2 { .. } => input(format!(
+            "--dt: {} is read as a PEER AT2 record, which states its time step on line 4; remove --dt (or give --format one-column)",
+            a.record.display()
+        )),
+        FormatRefusal::DtWithTwoColumn { .. } => input(
+            "--dt: a two-column record takes its time step from its time column; remove --dt",
+        ),
+        FormatRefusal::OneColumnWithoutDt => input("a one-column record needs --dt (s)"),
+        FormatRefusal::BadDt { dt } => input(format!("--dt {dt}: expected a time step > 0 (s)")),
+    })?;
+    if let (RecordFormat::At2, Some(u)) = (choice.format, units) {
+        // Agreeing with the header is harmless; contradicting it is refused.
+        let text = std::fs::read_to_string(&a.record).unwrap_or_default();
+        if let Some(h) = text
+            .lines()
+            .nth(2)
+            .and_then(structure::ground::record::at2_units)
+        {
+            if h != u {
+                return Err(input(format!(
+                    "--units {u}: {} states its units on line 3 as {h}; remove --units",
+                    a.record.display()
+                )));
             }
         }
     }
-    let units = units.unwrap_or(Units::G);
-    let format =
-        match (a.format, a.dt) {
-            (Some(FormatArg::At2), _) => RecordFormat::At2,
-            (Some(FormatArg::OneColumn), None) => {
-                return Err(input("a one-column record needs --dt (s)"))
-            }
-            (Some(FormatArg::OneColumn), Some(dt)) => RecordFormat::OneColumn { dt, units },
-            (None, Some(dt)) if !is_at2 => {
-                // One-column only because --dt came without --format: a table is refused.
-                structure::ground::record::check_inferred_one_column(
-                    &a.record,
-                    "give --format two-column without --dt to read time and acceleration, or \
-                     --format one-column to read every value in order",
-                )
-                .map_err(input)?;
-                RecordFormat::OneColumn { dt, units }
-            }
-            (Some(FormatArg::TwoColumn), Some(_)) => return Err(input(
-                "--dt: a two-column record takes its time step from its time column; remove --dt",
-            )),
-            (Some(FormatArg::TwoColumn), None) => RecordFormat::TwoColumn { units },
-            (None, _) if is_at2 => RecordFormat::At2,
-            (None, _) => RecordFormat::TwoColumn { units },
-        };
-    if let RecordFormat::OneColumn { dt, .. } = format {
-        if !(dt.is_finite() && dt > 0.0) {
-            return Err(input(format!("--dt {dt}: expected a time step > 0 (s)")));
-        }
-    }
-    GroundMotion::load(&a.record, &format).map_err(input)
+    GroundMotion::load_choice(&a.record, &choice).map_err(|e| match e {
+        // One-column only because --dt came without --format: a table is refused.
+        RecordError::InferredOneColumn { .. } => input(format!(
+            "{e}: give --format two-column without --dt to read time and acceleration, or \
+             --format one-column to read every value in order"
+        )),
+        e => input(e),
+    })
 }
 
 fn load_scene(path: &Path, set: &[String]) -> Result<Scene> {
@@ -974,8 +942,8 @@ fn studies_command(command: StudiesCommand) -> Result<()> {
                 }
                 recs.push(std::path::absolute(r)?.display().to_string());
             }
-            let record_set = record_overrides(record_format, record_dt, &records)?;
             check_user_records(&records, record_format, record_dt)?;
+            let record_set = record_overrides(record_format, record_dt);
             if !studies_dir.is_dir() {
                 return Err(input(format!(
                     "--studies-dir {}: not a folder (expected the folder holding the study definitions, <name>.toml; the default is ./studies, so run from the repository's root or give --studies-dir DIR)",

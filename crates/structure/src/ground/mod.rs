@@ -6,7 +6,8 @@ pub mod spectrum;
 
 pub use nigam_jennings::Propagator;
 pub use record::{
-    peak_abs, record_path_problem, GroundMotion, ParseUnitsError, RecordError, RecordFormat,
-    RecordPathProblem, Units,
+    is_at2_name, peak_abs, record_path_problem, FormatKind, FormatRefusal, GroundMotion,
+    ParseUnitsError, RecordChoice, RecordError, RecordFormat, RecordPathProblem, ScaleOverflow,
+    Units,
 };
 pub use spectrum::{default_periods, response_spectrum, SpectrumPoint};

@@ -1,5 +1,6 @@
-//! Ground-motion records: reading (PEER AT2, two-column, one-column), scaling, peaks and
-//! piecewise-linear interpolation.
+//! Ground-motion records: choosing how a file is read ([`RecordFormat::infer`], the one rule
+//! the scene loader and the commands use), reading (PEER AT2, two-column, one-column),
+//! scaling, peaks and piecewise-linear interpolation.
 //!
 //! Every record is stored in SI units (m/s²) on a uniform grid: sample `i` is at `t = i·dt`.
 //! Between samples the acceleration is taken as linear, which is also the assumption of
@@ -88,10 +89,148 @@ pub enum RecordFormat {
     OneColumn { dt: f64, units: Units },
 }
 
-/// Records parsed by [`GroundMotion::load`] in this process, by (file bytes, file name,
-/// format), with the bytes they hold; forgotten all at once before they would pass
-/// [`RECORDS_BYTES`] (the 60 records of the studies hold about 8 MB).
-type RecordKey = (Vec<u8>, String, String);
+/// A record file's layout without its settings: what a scene's `ground_motion.format` or a
+/// command's `--format` names.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FormatKind {
+    /// PEER NGA `.AT2` ([`RecordFormat::At2`]).
+    At2,
+    /// Time and acceleration ([`RecordFormat::TwoColumn`]).
+    TwoColumn,
+    /// Acceleration values only, with a time step ([`RecordFormat::OneColumn`]).
+    OneColumn,
+}
+
+impl FormatKind {
+    /// The name scenes and commands use: `"at2"`, `"two-column"`, `"one-column"`.
+    pub fn name(self) -> &'static str {
+        match self {
+            FormatKind::At2 => "at2",
+            FormatKind::TwoColumn => "two-column",
+            FormatKind::OneColumn => "one-column",
+        }
+    }
+
+    /// The kind named `name` exactly ([`FormatKind::name`]), if any.
+    pub fn from_name(name: &str) -> Option<Self> {
+        [
+            FormatKind::At2,
+            FormatKind::TwoColumn,
+            FormatKind::OneColumn,
+        ]
+        .into_iter()
+        .find(|k| k.name() == name)
+    }
+}
+
+/// How a record file is to be read, as [`RecordFormat::infer`] chose it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RecordChoice {
+    pub format: RecordFormat,
+    /// One-column only because a time step came without a format: the read
+    /// ([`GroundMotion::load_choice`]) then refuses a table of two or more values on every
+    /// line ([`RecordError::InferredOneColumn`]). Without effect on the other formats.
+    pub inferred: bool,
+}
+
+impl RecordChoice {
+    /// The format given on purpose (not inferred).
+    pub fn explicit(format: RecordFormat) -> Self {
+        RecordChoice {
+            format,
+            inferred: false,
+        }
+    }
+}
+
+/// Why [`RecordFormat::infer`] refuses a format, a time step and a file name together. The
+/// messages name no setting: each caller phrases the refusal in its own keys or flags.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+pub enum FormatRefusal {
+    /// A time step for a PEER AT2 record, which states its own on header line 4. `by_name`:
+    /// no format was given and the file's name ends in `.at2` ([`is_at2_name`]).
+    #[error(
+        "a time step ({dt} s) was given for a PEER AT2 record ({}), which states its time step \
+         on header line 4",
+        if *.by_name { "its name ends in .at2" } else { "the format given" }
+    )]
+    DtWithAt2 { dt: f64, by_name: bool },
+    /// A time step for a record given as two-column, which takes its step from its times.
+    #[error(
+        "a time step ({dt} s) was given for a two-column record, which takes its time step \
+         from its time column"
+    )]
+    DtWithTwoColumn { dt: f64 },
+    /// A record given as one-column without its time step.
+    #[error("a one-column record needs its time step")]
+    OneColumnWithoutDt,
+    /// A time step of a one-column record that is not finite and > 0.
+    #[error("expected a time step > 0 (s), found {dt}")]
+    BadDt { dt: f64 },
+}
+
+/// Whether `path` is named like a PEER AT2 record: its extension is `at2` in any case.
+pub fn is_at2_name(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("at2"))
+}
+
+impl RecordFormat {
+    /// The one rule that chooses how a record file is read, from the format given (if
+    /// any), the time step given (if any) and the file's name (not its content: nothing is
+    /// read). Without a format: AT2 for a name ending in `.at2` (any case), else one-column
+    /// when a time step is given ([`RecordChoice::inferred`]), else two-column. A time step
+    /// is refused with AT2 and two-column, needed (finite, > 0) with one-column, in that
+    /// order. `units` are those of a two- or one-column record; an AT2 record states its own
+    /// on header line 3, and whether units given with it are refused or compared with the
+    /// header is the caller's to decide.
+    pub fn infer(
+        path: &Path,
+        format: Option<FormatKind>,
+        dt: Option<f64>,
+        units: Units,
+    ) -> Result<RecordChoice, FormatRefusal> {
+        let kind = match format {
+            Some(k) => k,
+            None if is_at2_name(path) => FormatKind::At2,
+            None if dt.is_some() => FormatKind::OneColumn,
+            None => FormatKind::TwoColumn,
+        };
+        let inferred = format.is_none() && kind == FormatKind::OneColumn;
+        let format = match (kind, dt) {
+            (FormatKind::At2, Some(dt)) => {
+                return Err(FormatRefusal::DtWithAt2 {
+                    dt,
+                    by_name: format.is_none(),
+                })
+            }
+            (FormatKind::At2, None) => RecordFormat::At2,
+            (FormatKind::TwoColumn, Some(dt)) => return Err(FormatRefusal::DtWithTwoColumn { dt }),
+            (FormatKind::TwoColumn, None) => RecordFormat::TwoColumn { units },
+            (FormatKind::OneColumn, None) => return Err(FormatRefusal::OneColumnWithoutDt),
+            (FormatKind::OneColumn, Some(dt)) if !(dt.is_finite() && dt > 0.0) => {
+                return Err(FormatRefusal::BadDt { dt })
+            }
+            (FormatKind::OneColumn, Some(dt)) => RecordFormat::OneColumn { dt, units },
+        };
+        Ok(RecordChoice { format, inferred })
+    }
+
+    /// Its kind, without its settings.
+    pub fn kind(&self) -> FormatKind {
+        match self {
+            RecordFormat::At2 => FormatKind::At2,
+            RecordFormat::TwoColumn { .. } => FormatKind::TwoColumn,
+            RecordFormat::OneColumn { .. } => FormatKind::OneColumn,
+        }
+    }
+}
+
+/// Records parsed by [`GroundMotion::load_bytes`] in this process, by (file bytes, file name,
+/// format, inferred one-column), with the bytes they hold; forgotten all at once before they
+/// would pass [`RECORDS_BYTES`] (the 60 records of the studies hold about 8 MB). An inferred
+/// one-column read has its own entries: it refuses a table that an explicit one accepts.
+type RecordKey = (Vec<u8>, String, String, bool);
 #[derive(Default)]
 struct RecordMemo {
     records: std::collections::HashMap<RecordKey, GroundMotion>,
@@ -151,21 +290,20 @@ pub enum RecordError {
         line: usize,
         step: f64,
     },
-    /// A file read as one-column only because a time step was given without a format, whose
-    /// every line of numbers holds the same count `values` ≥ 2 (a table such as time and
-    /// acceleration, whatever its step): refused rather than read value after value.
-    /// `advice` names the settings to give (the caller's keys or flags). `line`: its first
-    /// line of numbers.
+    /// A file read as one-column only because a time step was given without a format
+    /// ([`RecordChoice::inferred`]), whose every line of numbers holds the same count
+    /// `values` ≥ 2 (a table such as time and acceleration, whatever its step): refused
+    /// rather than read value after value. `line`: its first line of numbers. The message
+    /// ends where the caller adds, after `: `, the settings to give in its own keys or flags.
     #[error(
         "{origin} line {line}: every line of numbers holds {values} values, as a table with a \
          time column does, but the file is read as one-column because a time step was given \
-         without a format: {advice}"
+         without a format"
     )]
     InferredOneColumn {
         origin: String,
         line: usize,
         values: usize,
-        advice: String,
     },
     /// The number of values declared in the header (at `line`) differs from the number present.
     #[error(
@@ -234,6 +372,16 @@ pub enum RecordError {
     },
 }
 
+/// Error of [`GroundMotion::checked_scaled`]: `factor` takes sample `sample` (1-based), of
+/// `value` m/s², beyond the range of floating point.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+#[error("{factor:e} scales sample {sample} ({value:e} m/s^2) beyond the range of floating point (expected a factor that leaves every acceleration finite)")]
+pub struct ScaleOverflow {
+    pub factor: f64,
+    pub sample: usize,
+    pub value: f64,
+}
+
 /// The end of a [`RecordError::Value`] message on a header-like first data line.
 const HEADER_HINT: &str = "; a header line is not read: remove it or start it with `#` (a comment)";
 
@@ -267,26 +415,17 @@ pub fn values_per_line(text: &str) -> Option<(usize, usize)> {
     found
 }
 
-/// Refuses a file about to be read as one-column only because a time step was given without
-/// a format ([`RecordError::InferredOneColumn`]) when every line of numbers holds the same
-/// count of two or more values: then it is most likely a table with a time column, and read
-/// value after value its times would become accelerations (a two-column file whose steps are
-/// not uniform, or of two rows, passes the one-column reader's own check). A file that
-/// cannot be read is left to the reader, which says why. `advice`: what to give instead, in
-/// the caller's keys or flags.
-pub fn check_inferred_one_column(path: &Path, advice: &str) -> Result<(), RecordError> {
-    let Ok(bytes) = std::fs::read(path) else {
-        return Ok(());
-    };
-    match values_per_line(&String::from_utf8_lossy(&bytes)) {
+/// [`RecordError::InferredOneColumn`] for `text` about to be read as one-column only because
+/// a time step was given without a format, when every line of numbers holds the same count
+/// of two or more values: then it is most likely a table with a time column, and read value
+/// after value its times would become accelerations (a two-column file whose steps are not
+/// uniform, or of two rows, passes the one-column reader's own check).
+fn refuse_inferred_table(text: &str, origin: &str) -> Result<(), RecordError> {
+    match values_per_line(text) {
         Some((values, line)) if values >= 2 => Err(RecordError::InferredOneColumn {
-            origin: path.file_name().map_or_else(
-                || path.display().to_string(),
-                |f| f.to_string_lossy().into_owned(),
-            ),
+            origin: origin.to_string(),
             line,
             values,
-            advice: advice.to_string(),
         }),
         _ => Ok(()),
     }
@@ -660,6 +799,15 @@ fn parse_at2_npts_dt(line: &str) -> Option<(usize, f64)> {
     }
 }
 
+/// The bytes of the record file at `path` ([`RecordError::Io`] naming it when they cannot be
+/// read).
+pub fn read_bytes(path: &Path) -> Result<Vec<u8>, RecordError> {
+    std::fs::read(path).map_err(|error| RecordError::Io {
+        path: path.display().to_string(),
+        error,
+    })
+}
+
 const AT2_LINE4: &str = "\"NPTS= <n>, DT= <s> SEC\" or \"<n> <dt> NPTS, DT\"";
 
 impl GroundMotion {
@@ -692,33 +840,41 @@ impl GroundMotion {
         Ok(GroundMotion { name, dt, accel })
     }
 
-    /// Read a record file. The record's name is the file stem.
+    /// Read a record file in `format` (given on purpose, not inferred). The record's name is
+    /// the file stem.
     pub fn load(path: &Path, format: &RecordFormat) -> Result<Self, RecordError> {
-        let bytes = std::fs::read(path).map_err(|error| RecordError::Io {
-            path: path.display().to_string(),
-            error,
-        })?;
+        Self::load_choice(path, &RecordChoice::explicit(*format))
+    }
+
+    /// Read a record file as [`RecordFormat::infer`] chose: one read of the file, whose bytes
+    /// are parsed ([`GroundMotion::parse`]; an inferred one-column read refuses a table on
+    /// those same bytes). The record's name is the file stem.
+    pub fn load_choice(path: &Path, choice: &RecordChoice) -> Result<Self, RecordError> {
+        Self::load_bytes(path, read_bytes(path)?, choice)
+    }
+
+    /// [`GroundMotion::load_choice`] of `bytes` already read from `path` (which names the
+    /// record and the file in messages), for a caller that looks at the bytes itself too.
+    pub fn load_bytes(
+        path: &Path,
+        bytes: Vec<u8>,
+        choice: &RecordChoice,
+    ) -> Result<Self, RecordError> {
         let origin = path.file_name().map_or_else(
             || path.display().to_string(),
             |f| f.to_string_lossy().into_owned(),
         );
         // Every study case loads its scene, and with it its record: a file read before with
-        // the same bytes, name and format is not parsed again (the key holds the bytes
-        // themselves, so a changed file is read anew).
-        let key = (bytes, origin, format!("{format:?}"));
+        // the same bytes, name and format (and inferred or not) is not parsed again (the key
+        // holds the bytes themselves, so a changed file is read anew).
+        let inferred = choice.inferred && matches!(choice.format, RecordFormat::OneColumn { .. });
+        let key = (bytes, origin, format!("{:?}", choice.format), inferred);
         let memo = || RECORDS.lock().unwrap_or_else(|e| e.into_inner());
         if let Some(g) = memo().records.get(&key) {
             return Ok(g.clone());
         }
-        let (bytes, origin, _) = &key;
-        let text = String::from_utf8_lossy(bytes);
-        let g = match *format {
-            RecordFormat::At2 => Self::from_at2_str(&text, origin),
-            RecordFormat::TwoColumn { units } => Self::from_two_column_str(&text, origin, units),
-            RecordFormat::OneColumn { dt, units } => {
-                Self::from_one_column_str(&text, origin, dt, units)
-            }
-        }?;
+        let (bytes, origin, _, _) = &key;
+        let g = Self::parse(&String::from_utf8_lossy(bytes), origin, choice)?;
         let size = key.0.len() + 8 * g.accel.len();
         let mut m = memo();
         if m.bytes + size > RECORDS_BYTES {
@@ -729,6 +885,23 @@ impl GroundMotion {
             m.records.insert(key, g.clone());
         }
         Ok(g)
+    }
+
+    /// Parse a record's text with the reader of `choice.format`; an inferred one-column read
+    /// ([`RecordChoice::inferred`]) first refuses a table of two or more values on every
+    /// line of numbers ([`RecordError::InferredOneColumn`]). `origin` names the file in
+    /// messages.
+    pub fn parse(text: &str, origin: &str, choice: &RecordChoice) -> Result<Self, RecordError> {
+        match choice.format {
+            RecordFormat::At2 => Self::from_at2_str(text, origin),
+            RecordFormat::TwoColumn { units } => Self::from_two_column_str(text, origin, units),
+            RecordFormat::OneColumn { dt, units } => {
+                if choice.inferred {
+                    refuse_inferred_table(text, origin)?;
+                }
+                Self::from_one_column_str(text, origin, dt, units)
+            }
+        }
     }
 
     /// Parse a PEER AT2 record, in the units its header states on line 3 ([`at2_units`]).
@@ -1063,6 +1236,20 @@ impl GroundMotion {
             name: self.name.clone(),
             dt: self.dt,
             accel: self.accel.iter().map(|a| a * factor).collect(),
+        }
+    }
+
+    /// The record multiplied by `factor`, or [`ScaleOverflow`] naming the first sample the
+    /// factor takes beyond the range of floating point (a factor near the largest `f64`).
+    pub fn checked_scaled(&self, factor: f64) -> Result<Self, ScaleOverflow> {
+        let scaled = self.scaled(factor);
+        match scaled.accel.iter().position(|a| !a.is_finite()) {
+            Some(i) => Err(ScaleOverflow {
+                factor,
+                sample: i + 1,
+                value: self.accel[i],
+            }),
+            None => Ok(scaled),
         }
     }
 
