@@ -28,7 +28,8 @@
 //! let modes = scene.buildings[0].modes()?;
 //! let f = modes.frequencies_hz();
 //! assert_eq!(f.len(), 15);
-//! // To the calibration's root tolerance (1e-14 on f₂/f₁), well inside 1e-12:
+//! // f₂/f₁ by a root search to 1e-14, f₁ by scaling the stiffness: both to the eigen-solver's
+//! // rounding (about 1e-14 here), well inside 1e-12:
 //! assert!((f[0] / 0.67 - 1.0).abs() < 1e-12 && (f[1] / 2.23 - 1.0).abs() < 1e-12);
 //! // Mass-normalised: φ₁ᵀ M φ₁ = 1 (kg·(kg^-½)² = 1).
 //! let m1: f64 = (0..15).map(|i| modes.masses[i] * modes.phi[(i, 0)].powi(2)).sum();

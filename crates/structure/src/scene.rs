@@ -1561,7 +1561,21 @@ fn validate(
                             "the record is all zeros: it cannot be scaled to a PGA".into(),
                         ));
                     }
-                    p * crate::G / pga
+                    let factor = p * crate::G / pga;
+                    // A PGA near the largest f64 over a small record PGA: the factor itself
+                    // overflows (every sample would be reported, the first even when zero).
+                    if !factor.is_finite() {
+                        return Err(invalid(
+                            key("pga"),
+                            format!(
+                                "{p:e} g: the factor from the record's PGA ({:e} g) to it is \
+                                 beyond the range of floating point (expected a PGA that leaves \
+                                 every acceleration finite)",
+                                pga / crate::G
+                            ),
+                        ));
+                    }
+                    factor
                 }
                 (None, Some(s)) => s,
                 (None, None) => 1.0,

@@ -7,7 +7,7 @@ use crate::model::Building;
 use crate::scene::{Contact, GapElementOptions, Limits, MomentumOptions, Scene};
 
 /// A scene without ground motion built in code. The contacts are kept as given, their
-/// [`Contact::entry`] too: the helpers below give contact i entry i (each its own entry).
+/// [`Contact::entry`] too (the helpers below build one contact each, entry 0).
 pub fn free_scene(buildings: Vec<Building>, contacts: Vec<Contact>, duration: f64) -> Scene {
     Scene {
         name: "test".into(),

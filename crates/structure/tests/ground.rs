@@ -1339,12 +1339,12 @@ fn the_inferred_refusal_is_made_on_the_text_parsed() {
     assert_eq!((g.accel.len(), g.dt), (2, 0.01));
 }
 
-/// The record memo keeps an inferred one-column read apart from an explicit one of the same
-/// file: the explicit read of a table succeeds and is remembered, and the inferred read
-/// after it is still refused (and the other way round, a refusal leaves nothing for the
-/// explicit read to trip on).
+/// An inferred one-column read of a table is refused even when the record memo holds the
+/// same file read as one-column on purpose: the explicit read of a table succeeds and is
+/// remembered, and the inferred read after it is still refused (and the other way round, a
+/// refusal leaves nothing for the explicit read to trip on).
 #[test]
-fn the_memo_keeps_inferred_and_explicit_reads_apart() {
+fn an_inferred_read_checks_its_table_before_the_memo() {
     let dir = std::env::temp_dir().join(format!("pound-memo-inferred-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let f = dir.join("table.txt");
@@ -1360,8 +1360,7 @@ fn the_memo_keeps_inferred_and_explicit_reads_apart() {
     }
     // `load` is the explicit read.
     assert_eq!(GroundMotion::load(&f, &inferred.format).unwrap().npts(), 6);
-    // A one-value-per-line file read inferred is remembered apart too, and gives the same
-    // record as the explicit read.
+    // A one-value-per-line file read inferred gives the same record as the explicit read.
     let g = dir.join("values.txt");
     std::fs::write(&g, "0.1\n0.2\n0.3\n").unwrap();
     let a = GroundMotion::load_choice(&g, &inferred).unwrap();

@@ -557,7 +557,8 @@ fn a_record_value_that_overflows_in_si_names_the_line() {
 }
 
 /// A `scale` or `pga` that takes the record beyond floating point is refused with its key
-/// and the sample (it stopped the solver with a non-finite state at 0.32 s).
+/// and the sample or the record's PGA (it stopped the solver with a non-finite state at
+/// 0.32 s).
 #[test]
 fn a_scale_that_overflows_the_record_names_the_key() {
     let text = one("masses = [1e6]\nstory_stiffness = [1e9]")
@@ -571,12 +572,14 @@ fn a_scale_that_overflows_the_record_names_the_key() {
             "beyond the range of floating point",
         ],
     );
+    // With `pga` the factor itself overflows (1e308 g × G): said so, with the record's PGA
+    // (it named sample 1 as overflowing, whatever its value).
     err_has(
         load(&format!("{text}pga = 1e308\n"), &[]),
         &[
             "key `ground_motion.pga`",
-            "1e308 g scales sample",
-            "beyond the range of floating point",
+            "1e308 g: the factor from the record's PGA (1e0 g) to it is beyond the range of \
+             floating point",
         ],
     );
     assert!(load(&format!("{text}scale = 1e300\n"), &[]).is_ok());

@@ -936,6 +936,18 @@ fn overlaps_warn_and_are_reported() {
         worst["left_floor"], worst["right_floor"]
     );
     assert!(err.contains("warning:") && err.contains(&named), "{err}");
+    // How many, in the plural (the roof-only scene: several lower pairs).
+    let beyond = ov
+        .iter()
+        .filter(|o| o["max_overlap"].as_f64().unwrap() > 0.0)
+        .count();
+    assert!(beyond > 1, "{beyond}");
+    assert!(
+        err.contains(&format!(
+            "warning: {beyond} facing floor pairs without a contact overlapped beyond the gap; "
+        )),
+        "{err}"
+    );
     // The summary lists them.
     let o = pound(&["run", &scene(), "--method", "gap", "--no-baseline"]);
     let text = String::from_utf8_lossy(&o.stdout);
@@ -970,5 +982,55 @@ fn overlaps_warn_and_are_reported() {
     assert_eq!(
         v["resolved_scene"]["contacts"].as_array().unwrap().len(),
         15
+    );
+}
+
+/// The overlap warning in the singular: a two-story pair with a roof contact, whose first
+/// floors (the one pair without a contact) overlap beyond the gap under a 2 Hz sine.
+#[test]
+fn one_overlapping_pair_is_named_in_the_singular() {
+    let d = TempDir::new("overlap-one");
+    let record: String = (0..300)
+        .map(|i| {
+            format!(
+                "{:.6}\n",
+                0.8 * (2.0 * std::f64::consts::PI * 2.0 * i as f64 * 0.01).sin()
+            )
+        })
+        .collect();
+    std::fs::write(d.path("sine.txt"), record).unwrap();
+    let scene = d.path("pair.toml");
+    std::fs::write(
+        &scene,
+        "name = \"two-story pair\"\n\
+         [[buildings]]\nname = \"a\"\nmasses = [1.0e5, 1.0e5]\nstory_stiffness = [2.0e8, 2.0e8]\ndamping_ratio = 0.05\n\
+         [[buildings]]\nname = \"b\"\nmasses = [1.0e5, 1.0e5]\nstory_stiffness = [6.0e8, 6.0e8]\ndamping_ratio = 0.05\n\
+         [[contacts]]\nleft = \"a\"\nleft_floor = 2\nright = \"b\"\nright_floor = 2\ngap = 0.002\n\
+         [ground_motion]\nfile = \"sine.txt\"\ndt = 0.01\n",
+    )
+    .unwrap();
+    let out = d.path("run.json");
+    let o = pound(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--method",
+        "momentum",
+        "--no-baseline",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let err = String::from_utf8_lossy(&o.stderr);
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    let ov = v["overlaps"].as_array().unwrap();
+    assert_eq!(ov.len(), 1);
+    assert!(ov[0]["max_overlap"].as_f64().unwrap() > 0.0, "{ov:?}");
+    assert!(
+        err.contains(
+            "warning: 1 facing floor pair without a contact overlapped beyond the gap; worst: a \
+             floor 1 / b floor 1 by "
+        ),
+        "{err}"
     );
 }

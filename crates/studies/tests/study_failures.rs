@@ -65,10 +65,6 @@ fn failed_cases_exit_4_and_are_named() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(4), "{err}");
     assert!(
-        err.contains(" failed (listed in each study's summary.md)"),
-        "{err}"
-    );
-    assert!(
         err.contains("Stalled") || err.contains("stall"),
         "the reason is named: {err}"
     );
@@ -83,6 +79,16 @@ fn failed_cases_exit_4_and_are_named() {
         .map(|c| c["spec"]["id"].as_str().unwrap())
         .collect();
     assert!(!failed.is_empty());
+    // Counted on stderr, the noun as the count asks.
+    let counted = if failed.len() == 1 {
+        "1 case failed".to_string()
+    } else {
+        format!("{} cases failed", failed.len())
+    };
+    assert!(
+        err.contains(&format!("{counted} (listed in each study's summary.md)")),
+        "{err}"
+    );
     for id in failed {
         assert!(summary.contains(id), "{id} not named in the summary");
     }
@@ -398,6 +404,31 @@ fn record_format_of_user_records() {
     );
     assert!(!err.contains("one value per line"), "{err}");
     assert!(!out.exists());
+    // A bad --record-dt with an AT2 file among the records: the advice to remove
+    // --record-dt, whatever the files' order (it was the first file's refusal).
+    let at2 = d.write(
+        "cap.AT2",
+        &std::fs::read_to_string(format!(
+            "{studies}/../data/ground-motions/RSN752_LOMAP_CAP000.AT2"
+        ))
+        .unwrap(),
+    );
+    for (name, records) in [("at2-first", [&at2, &one]), ("at2-last", [&one, &at2])] {
+        let out = d.path(name);
+        let mut extra = vec!["--records"];
+        extra.extend(records.iter().map(|r| r.to_str().unwrap()));
+        extra.extend(["--record-dt", "-1"]);
+        let o = common::quick_run_with("modes", &studies, out.to_str().unwrap(), &extra);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{name}: {err}");
+        assert!(
+            err.contains("--record-dt -1: ")
+                && err.contains("cap.AT2 is read as a PEER AT2 record")
+                && err.contains("remove --record-dt"),
+            "{name}: {err}"
+        );
+        assert!(!out.exists(), "{name}");
+    }
     // A study scene of one's own whose record is one-column (`format`, `dt`): --records
     // files are read as the options (here none: by their names) say, not in its format.
     let own = TempDir::new("recformat-own");

@@ -227,10 +227,11 @@ impl RecordFormat {
 }
 
 /// Records parsed by [`GroundMotion::load_bytes`] in this process, by (file bytes, file name,
-/// format, inferred one-column), with the bytes they hold; forgotten all at once before they
-/// would pass [`RECORDS_BYTES`] (the 60 records of the studies hold about 8 MB). An inferred
-/// one-column read has its own entries: it refuses a table that an explicit one accepts.
-type RecordKey = (Vec<u8>, String, String, bool);
+/// format), with the bytes they hold; forgotten all at once before they would pass
+/// [`RECORDS_BYTES`] (the 60 records of the studies hold about 8 MB). An inferred one-column
+/// read shares the explicit read's entry (the record is the same) but makes its table check
+/// before looking the record up, so a table that an explicit read accepted is still refused.
+type RecordKey = (Vec<u8>, String, String);
 #[derive(Default)]
 struct RecordMemo {
     records: std::collections::HashMap<RecordKey, GroundMotion>,
@@ -865,16 +866,20 @@ impl GroundMotion {
             |f| f.to_string_lossy().into_owned(),
         );
         // Every study case loads its scene, and with it its record: a file read before with
-        // the same bytes, name and format (and inferred or not) is not parsed again (the key
-        // holds the bytes themselves, so a changed file is read anew).
-        let inferred = choice.inferred && matches!(choice.format, RecordFormat::OneColumn { .. });
-        let key = (bytes, origin, format!("{:?}", choice.format), inferred);
+        // the same bytes, name and format is not parsed again (the key holds the bytes
+        // themselves, so a changed file is read anew). An inferred one-column read checks its
+        // text first: the memo may hold the same file read as one-column on purpose.
+        let key = (bytes, origin, format!("{:?}", choice.format));
+        let (bytes, origin, _) = &key;
+        let text = String::from_utf8_lossy(bytes);
+        if choice.inferred && matches!(choice.format, RecordFormat::OneColumn { .. }) {
+            refuse_inferred_table(&text, origin)?;
+        }
         let memo = || RECORDS.lock().unwrap_or_else(|e| e.into_inner());
         if let Some(g) = memo().records.get(&key) {
             return Ok(g.clone());
         }
-        let (bytes, origin, _, _) = &key;
-        let g = Self::parse(&String::from_utf8_lossy(bytes), origin, choice)?;
+        let g = Self::parse_as(&text, origin, &choice.format)?;
         let size = key.0.len() + 8 * g.accel.len();
         let mut m = memo();
         if m.bytes + size > RECORDS_BYTES {
@@ -892,13 +897,18 @@ impl GroundMotion {
     /// line of numbers ([`RecordError::InferredOneColumn`]). `origin` names the file in
     /// messages.
     pub fn parse(text: &str, origin: &str, choice: &RecordChoice) -> Result<Self, RecordError> {
-        match choice.format {
+        if choice.inferred && matches!(choice.format, RecordFormat::OneColumn { .. }) {
+            refuse_inferred_table(text, origin)?;
+        }
+        Self::parse_as(text, origin, &choice.format)
+    }
+
+    /// Parse a record's text with the reader of `format` (no inferred-table check).
+    fn parse_as(text: &str, origin: &str, format: &RecordFormat) -> Result<Self, RecordError> {
+        match *format {
             RecordFormat::At2 => Self::from_at2_str(text, origin),
             RecordFormat::TwoColumn { units } => Self::from_two_column_str(text, origin, units),
             RecordFormat::OneColumn { dt, units } => {
-                if choice.inferred {
-                    refuse_inferred_table(text, origin)?;
-                }
                 Self::from_one_column_str(text, origin, dt, units)
             }
         }
