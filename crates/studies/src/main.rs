@@ -539,10 +539,11 @@ fn load_record(a: &RecordArgs) -> Result<GroundMotion> {
         FormatRefusal::OneColumnWithoutDt => input("a one-column record needs --dt (s)"),
         FormatRefusal::BadDt { dt } => input(format!("--dt {dt}: expected a time step > 0 (s)")),
     })?;
+    // One read of the file: the header's units are looked at in the bytes then parsed.
+    let bytes = structure::ground::record::read_bytes(&a.record).map_err(input)?;
     if let (RecordFormat::At2, Some(u)) = (choice.format, units) {
         // Agreeing with the header is harmless; contradicting it is refused.
-        let text = std::fs::read_to_string(&a.record).unwrap_or_default();
-        if let Some(h) = text
+        if let Some(h) = String::from_utf8_lossy(&bytes)
             .lines()
             .nth(2)
             .and_then(structure::ground::record::at2_units)
@@ -555,7 +556,7 @@ fn load_record(a: &RecordArgs) -> Result<GroundMotion> {
             }
         }
     }
-    GroundMotion::load_choice(&a.record, &choice).map_err(|e| match e {
+    GroundMotion::load_bytes(&a.record, bytes, &choice).map_err(|e| match e {
         // One-column only because --dt came without --format: a table is refused.
         RecordError::InferredOneColumn { .. } => input(format!(
             "{e}: give --format two-column without --dt to read time and acceleration, or \
