@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
-use crate::ground::{FormatRefusal, GroundMotion, RecordChoice, RecordError, RecordFormat, Units};
+use crate::ground::{FormatRefusal, GroundMotion, RecordError, RecordFormat, Units};
 use crate::model::{
     calibrate_first_frequency, calibrate_two_frequencies, Building, Damping, ModelError, StoryLaw,
 };
@@ -1448,51 +1448,45 @@ fn validate(
                     })?)
                 }
             };
-            // The one rule ([`RecordFormat::infer`]): without `format`, AT2 for a name ending
-            // in .at2 (any case), else one-column when `dt` is given (as `pound record FILE
-            // --dt S` reads it), else two-column.
-            let choice = RecordFormat::infer(Path::new(&g.file), kind, g.dt, units);
-            let at2 = matches!(
-                choice,
-                Ok(RecordChoice {
-                    format: RecordFormat::At2,
-                    ..
-                }) | Err(FormatRefusal::DtWithAt2 { .. })
-            );
-            if at2 && (g.units.is_some() || g.dt.is_some()) {
+            // An AT2 record states its units and dt: either given is refused, both named.
+            let at2_settings = || {
                 let present: Vec<&str> = [("units", g.units.is_some()), ("dt", g.dt.is_some())]
                     .into_iter()
                     .filter_map(|(k, given)| given.then_some(k))
                     .collect();
-                return Err(invalid(
+                invalid(
                     key(present[0]),
                     format!(
                         "AT2 records state their units (header line 3) and dt (line 4); remove `{}`",
                         present.join("` and `")
                     ),
-                ));
-            }
-            let choice = choice.map_err(|refusal| {
-                invalid(
-                    key("dt"),
-                    match refusal {
-                        FormatRefusal::DtWithTwoColumn { .. } => {
-                            "format \"two-column\": a two-column record takes its dt from the \
-                             time column; remove `dt` (or, for a file of acceleration values \
-                             only, give format \"one-column\" or no format)"
-                                .into()
-                        }
-                        FormatRefusal::OneColumnWithoutDt => {
-                            "missing: a one-column record needs `dt` (s)".into()
-                        }
-                        FormatRefusal::BadDt { dt } => {
-                            format!("{dt}: expected a time step > 0 (s)")
-                        }
-                        // Answered above, with `units` if given too.
-                        FormatRefusal::DtWithAt2 { .. } => refusal.to_string(),
-                    },
                 )
-            })?;
+            };
+            // The one rule ([`RecordFormat::infer`]): without `format`, AT2 for a name ending
+            // in .at2 (any case), else one-column when `dt` is given (as `pound record FILE
+            // --dt S` reads it), else two-column.
+            let refused = |refusal| match refusal {
+                FormatRefusal::DtWithAt2 { .. } => at2_settings(),
+                FormatRefusal::DtWithTwoColumn { .. } => invalid(
+                    key("dt"),
+                    "format \"two-column\": a two-column record takes its dt from the time \
+                     column; remove `dt` (or, for a file of acceleration values only, give \
+                     format \"one-column\" or no format)"
+                        .into(),
+                ),
+                FormatRefusal::OneColumnWithoutDt => invalid(
+                    key("dt"),
+                    "missing: a one-column record needs `dt` (s)".into(),
+                ),
+                FormatRefusal::BadDt { dt } => {
+                    invalid(key("dt"), format!("{dt}: expected a time step > 0 (s)"))
+                }
+            };
+            let choice =
+                RecordFormat::infer(Path::new(&g.file), kind, g.dt, units).map_err(refused)?;
+            if choice.format == RecordFormat::At2 && g.units.is_some() {
+                return Err(at2_settings());
+            }
             if g.pga.is_some() && g.scale.is_some() {
                 return Err(invalid(
                     key("pga"),

@@ -394,25 +394,21 @@ fn check_user_records(
     dt: Option<f64>,
 ) -> Result<()> {
     let mut choices = Vec::with_capacity(records.len());
-    // The refusal said: the first to ask to remove --record-dt (it does not apply to an AT2
-    // or two-column file, whatever its value), else the first; not one by the files' order.
-    let mut refused: Option<(FormatRefusal, &PathBuf)> = None;
+    let mut refusals = Vec::new();
     for r in records {
         match RecordFormat::infer(r, format.map(FormatArg::kind), dt, Units::G) {
             Ok(choice) => choices.push(choice),
-            Err(f) => {
-                let bad_dt = |f: &FormatRefusal| matches!(f, FormatRefusal::BadDt { .. });
-                if refused
-                    .as_ref()
-                    .is_none_or(|(first, _)| bad_dt(first) && !bad_dt(&f))
-                {
-                    refused = Some((f, r));
-                }
-            }
+            Err(f) => refusals.push((f, r)),
         }
     }
-    if let Some((f, r)) = refused {
-        return Err(input(records_refusal(f, format, r)));
+    // The refusal said: the first that asks to remove --record-dt (it does not apply to an
+    // AT2 or two-column file, whatever its value), else the first; not one by the files' order.
+    if let Some((f, r)) = refusals
+        .iter()
+        .find(|(f, _)| !matches!(f, FormatRefusal::BadDt { .. }))
+        .or(refusals.first())
+    {
+        return Err(input(records_refusal(*f, format, r)));
     }
     for (r, choice) in records.iter().zip(&choices) {
         let how = match (choice.format, format) {

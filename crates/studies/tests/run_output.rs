@@ -20,6 +20,18 @@ fn run_momentum(scene: &str, secs: &str, extra: &[&str]) -> std::process::Output
     pound(&a)
 }
 
+/// `pound run ARGS... --out OUT`, which must succeed: its stderr and the JSON written.
+fn run_json(args: &[&str], out: &std::path::Path) -> (String, serde_json::Value) {
+    let mut a = vec!["run"];
+    a.extend_from_slice(args);
+    a.extend(["--out", out.to_str().unwrap()]);
+    let o = pound(&a);
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(o.status.success(), "{err}");
+    let v = serde_json::from_str(&std::fs::read_to_string(out).unwrap()).unwrap();
+    (err, v)
+}
+
 fn scene() -> String {
     concat!(
         env!("CARGO_MANIFEST_DIR"),
@@ -32,21 +44,18 @@ fn scene() -> String {
 fn run_json_has_provenance_and_amplification() {
     let d = TempDir::new("runjson");
     let out = d.path("run.json");
-    let o = pound(&[
-        "run",
-        &scene(),
-        "--method",
-        "momentum",
-        "--set",
-        "contacts.0.gap=0.05",
-        "--set",
-        "analysis.duration=12",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    let (_, v) = run_json(
+        &[
+            &scene(),
+            "--method",
+            "momentum",
+            "--set",
+            "contacts.0.gap=0.05",
+            "--set",
+            "analysis.duration=12",
+        ],
+        &out,
+    );
     assert_eq!(v["version"], env!("CARGO_PKG_VERSION"));
     assert_eq!(
         v["overrides"],
@@ -797,26 +806,23 @@ fn strip_nulls(v: &mut serde_json::Value) {
 fn resolved_scene_reruns_the_same_analysis() {
     let d = TempDir::new("resolved");
     let (a, b) = (d.path("a.json"), d.path("b.json"));
-    let o = pound(&[
-        "run",
-        &scene(),
-        "--method",
-        "momentum",
-        "--set",
-        "contacts.0.gap=0.05",
-        "--set",
-        "momentum.modes=10",
-        "--set",
-        "ground_motion.pga=0.3",
-        "--set",
-        "analysis.duration=8",
-        "--no-baseline",
-        "--out",
-        a.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let va: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&a).unwrap()).unwrap();
+    let (_, va) = run_json(
+        &[
+            &scene(),
+            "--method",
+            "momentum",
+            "--set",
+            "contacts.0.gap=0.05",
+            "--set",
+            "momentum.modes=10",
+            "--set",
+            "ground_motion.pga=0.3",
+            "--set",
+            "analysis.duration=8",
+            "--no-baseline",
+        ],
+        &a,
+    );
     let mut rs = va["resolved_scene"].clone();
     assert_eq!(rs["contacts"][0]["gap"], 0.05);
     assert_eq!(rs["momentum"]["modes"], 10);
@@ -905,19 +911,7 @@ fn history_has_drift_ratios_where_story_heights_are_given() {
 fn overlaps_warn_and_are_reported() {
     let d = TempDir::new("overlaps");
     let out = d.path("run.json");
-    let o = pound(&[
-        "run",
-        &scene(),
-        "--method",
-        "momentum",
-        "--no-baseline",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let err = String::from_utf8_lossy(&o.stderr);
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    let (err, v) = run_json(&[&scene(), "--method", "momentum", "--no-baseline"], &out);
     let ov = v["overlaps"].as_array().unwrap();
     assert_eq!(ov.len(), 14);
     assert_eq!(v["unmodelled"], serde_json::json!([]));
@@ -961,23 +955,20 @@ fn overlaps_warn_and_are_reported() {
     );
     // Contact at every floor: nothing to audit, no warning.
     let aligned = scene().replace("scene.toml", "scene-aligned.toml");
-    let o = pound(&[
-        "run",
-        &aligned,
-        "--method",
-        "momentum",
-        "--no-baseline",
-        "--set",
-        "analysis.duration=12",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (err, v) = run_json(
+        &[
+            &aligned,
+            "--method",
+            "momentum",
+            "--no-baseline",
+            "--set",
+            "analysis.duration=12",
+        ],
+        &out,
+    );
     // (stderr names the file written, whose folder's name holds "overlap": look for the
     // warning itself.)
-    assert!(!String::from_utf8_lossy(&o.stderr).contains("warning"));
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    assert!(!err.contains("warning"));
     assert_eq!(v["overlaps"], serde_json::json!([]));
     assert_eq!(
         v["resolved_scene"]["contacts"].as_array().unwrap().len(),
@@ -1009,20 +1000,15 @@ fn one_overlapping_pair_is_named_in_the_singular() {
          [ground_motion]\nfile = \"sine.txt\"\ndt = 0.01\n",
     )
     .unwrap();
-    let out = d.path("run.json");
-    let o = pound(&[
-        "run",
-        scene.to_str().unwrap(),
-        "--method",
-        "momentum",
-        "--no-baseline",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let err = String::from_utf8_lossy(&o.stderr);
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    let (err, v) = run_json(
+        &[
+            scene.to_str().unwrap(),
+            "--method",
+            "momentum",
+            "--no-baseline",
+        ],
+        &d.path("run.json"),
+    );
     let ov = v["overlaps"].as_array().unwrap();
     assert_eq!(ov.len(), 1);
     assert!(ov[0]["max_overlap"].as_f64().unwrap() > 0.0, "{ov:?}");

@@ -141,6 +141,11 @@ impl RecordChoice {
             inferred: false,
         }
     }
+
+    /// Whether the read refuses a table ([`RecordChoice::inferred`] one-column).
+    fn refuses_tables(&self) -> bool {
+        self.inferred && matches!(self.format, RecordFormat::OneColumn { .. })
+    }
 }
 
 /// Why [`RecordFormat::infer`] refuses a format, a time step and a file name together. The
@@ -872,7 +877,7 @@ impl GroundMotion {
         let key = (bytes, origin, format!("{:?}", choice.format));
         let (bytes, origin, _) = &key;
         let text = String::from_utf8_lossy(bytes);
-        if choice.inferred && matches!(choice.format, RecordFormat::OneColumn { .. }) {
+        if choice.refuses_tables() {
             refuse_inferred_table(&text, origin)?;
         }
         let memo = || RECORDS.lock().unwrap_or_else(|e| e.into_inner());
@@ -897,7 +902,7 @@ impl GroundMotion {
     /// line of numbers ([`RecordError::InferredOneColumn`]). `origin` names the file in
     /// messages.
     pub fn parse(text: &str, origin: &str, choice: &RecordChoice) -> Result<Self, RecordError> {
-        if choice.inferred && matches!(choice.format, RecordFormat::OneColumn { .. }) {
+        if choice.refuses_tables() {
             refuse_inferred_table(text, origin)?;
         }
         Self::parse_as(text, origin, &choice.format)
