@@ -5,7 +5,8 @@
 //!   text has an em of at least 0.0332 × the figure width, i.e. 8 pt when printed 85 mm wide;
 //! - every image link of every `summary.md` resolves relative to the summary's own folder;
 //! - every `cases.csv` is tidy: one name per column, rectangular, units on dimensional
-//!   columns.
+//!   columns;
+//! - no written text hedges a plural as "record(s)": a count says "1 record" or "2 records".
 
 mod common;
 
@@ -148,6 +149,27 @@ fn image_links(md: &str) -> Vec<String> {
 
 /// Every image link of every `summary.md` under `root` names an existing file relative to
 /// the summary's folder; returns the number of links checked.
+/// Panics at the first "word(s)" of the text (a letter right before "(s)"; a unit such as
+/// "t (s)" has a space); returns the number of files read.
+fn check_plurals(files: &[PathBuf]) -> usize {
+    for f in files {
+        let text = std::fs::read_to_string(f).unwrap();
+        if let Some(at) = text
+            .match_indices("(s)")
+            .map(|(i, _)| i)
+            .find(|&i| text[..i].ends_with(|c: char| c.is_ascii_alphabetic()))
+        {
+            let from = text[..at].rfind(char::is_whitespace).map_or(0, |w| w + 1);
+            panic!(
+                "{}: \"{}(s)\" hedges a plural",
+                f.display(),
+                &text[from..at]
+            );
+        }
+    }
+    files.len()
+}
+
 fn check_links(root: &Path) -> usize {
     let summaries = find(root, &|n| n == "summary.md");
     assert!(
@@ -276,6 +298,10 @@ fn quick_run_artefacts_are_legible_linked_and_tidy() {
     for c in &cases {
         check_cases_csv(c);
     }
+    let texts = find(&dest, &|n| {
+        n.ends_with(".md") || n.ends_with(".csv") || n.ends_with(".json")
+    });
+    assert!(check_plurals(&texts) > n_studies);
 }
 
 /// In the committed data tables a record has one name: as many distinct `record` values as
@@ -354,6 +380,10 @@ fn checks_catch_bad_artefacts() {
             "{bad}"
         );
     }
+    let hedged = t.write("hedge.md", "Of 2 record(s) at t (s) = 1.\n");
+    assert!(std::panic::catch_unwind(|| check_plurals(&[hedged])).is_err());
+    let plain = t.write("plain.md", "Of 2 records at t (s) = 1 (see (s)).\n");
+    assert_eq!(check_plurals(&[plain]), 1);
     let good = t.write(
         "cases.csv",
         "case_id,status,error_kind,wall_s,gap_m,energy_input_J\n1,ok,,1,0.1,2\n",

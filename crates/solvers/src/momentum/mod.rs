@@ -175,7 +175,7 @@ fn drive(
         .map(|b| format!("{}/{}", b.range.len(), b.available))
         .collect();
     let mut settings = format!(
-        "{} impulse, modes {}, h = {:.4e} s ({}{} event-check windows per step), persistent contact {}",
+        "{} impulse, modes {}, h = {:.4e} s ({}{} per step), persistent contact {}",
         match p.options.impulse {
             ImpulseVariant::Consistent => "consistent",
             ImpulseVariant::Paper => "paper",
@@ -187,7 +187,7 @@ fn drive(
         } else {
             String::new()
         },
-        p.sub,
+        structure::count(p.sub, "event-check window", "event-check windows"),
         if p.options.persistent_contact {
             format!("on (capture {:.1e} m/s)", p.options.capture_velocity)
         } else {

@@ -492,10 +492,10 @@ impl Study for Gap {
             if exact_max <= gmax {
                 "the gap grid extends past it for every record, so every curve ends with no contact.".to_string()
             } else {
-                format!(
-                    "{} record(s) still pound at the largest gap of the grid.",
-                    exacts.iter().filter(|&&x| x > gmax).count()
-                )
+                match exacts.iter().filter(|&&x| x > gmax).count() {
+                    1 => "1 record still pounds at the largest gap of the grid.".to_string(),
+                    n => format!("{n} records still pound at the largest gap of the grid."),
+                }
             }
         ));
         let ratio = |q: usize| Spread::of(seps.iter().flatten().map(|s| s[q] / s[0]));

@@ -339,7 +339,7 @@ impl Study for ModelForm {
         let g = grid(ctx, &d);
         let head = g.records[0].as_str();
         let head_label = record_label(head);
-        let n_rec = g.records.len();
+        let n_rec = structure::count(g.records.len(), "record", "records");
         let c = |v: &Variant, rec: &str, gap: f64, cr: f64, run: Run| {
             case(ctx, &d, &scene, v, rec, (gap, cr, run))
         };
@@ -406,7 +406,7 @@ impl Study for ModelForm {
         // --- Amplification table.
         let mut amp = Table::new(
             &format!(
-                "Top-story and largest story amplification per variant (record {head_label}; medians over the n of {n_rec} record(s) that pound in that case, momentum method); s_req = peak u1 − u2 at the roof without contact"
+                "Top-story and largest story amplification per variant (record {head_label}; medians over the records that pound in that case, n of {n_rec}, momentum method); s_req = peak u1 − u2 at the roof without contact"
             ),
             &[
                 "variant", "gap (m)", "c_r", "s_req (m)", "gap / s_req",
@@ -600,7 +600,7 @@ impl Study for ModelForm {
             ));
         }
         reading.push(format!(
-            "Top-story amplification of buildings 1 / 2 with the momentum method (all modes), record {head_label} (median over the n of {n_rec} record(s) that pound), gap {gap0} m, c_r = 1: {}.",
+            "Top-story amplification of buildings 1 / 2 with the momentum method (all modes), record {head_label} (median over the records that pound, n of {n_rec}), gap {gap0} m, c_r = 1: {}.",
             parts.join("; ")
         ));
         if let (Some(a), Some(b)) = (t(calib, 0), t(calib, 1)) {

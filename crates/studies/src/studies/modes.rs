@@ -296,14 +296,19 @@ impl Study for Modes {
                     d.restitution
                 ),
                 Some((e, worst_n)) => format!(
-                    "the achieved restitution falls to {} (worst impact of any record) with {worst_n} mode(s) (target {})",
+                    "the achieved restitution falls to {} (worst impact of any record) with {} (target {})",
                     f(Some(e), 3),
+                    structure::count(worst_n, "mode", "modes"),
                     d.restitution
                 ),
                 None => "no impact has a defined restitution".into(),
             };
+            let (m0, m1) = (
+                structure::count(n0, "mode", "modes"),
+                structure::count(n1, "mode", "modes"),
+            );
             reading.push(format!(
-                "{var} impulse ({} of {} records pound with {n1} modes): the contact-story amplification of building 1, median (16–84 %), goes from {} with {n0} mode(s) to {} with {n1}, of building 2 from {} to {}; with 10 modes {} and {}; {restitution}.",
+                "{var} impulse ({} of {} records pound with {m1}): the contact-story amplification of building 1, median (16–84 %), goes from {} with {m0} to {} with {m1}, of building 2 from {} to {}; with 10 modes {} and {}; {restitution}.",
                 at_n(&pa, n1).n,
                 recs.len(),
                 at_n(&pa, n0).words(2),

@@ -567,10 +567,13 @@ impl Study for Stiffness {
             .map(|r| record_name(r))
             .collect();
         if !no_contact.is_empty() {
+            let one = no_contact.len() == 1;
             reading.push(format!(
-                "{} record(s) never pound at this gap ({}); they are left out of every statistic (their gap-element error is integration error only) and kept in stiffness_all.csv.",
-                no_contact.len(),
-                no_contact.join(", ")
+                "{} at this gap ({}); {} left out of every statistic ({} gap-element error is integration error only) and kept in stiffness_all.csv.",
+                structure::count(no_contact.len(), "record never pounds", "records never pound"),
+                no_contact.join(", "),
+                if one { "it is" } else { "they are" },
+                if one { "its" } else { "their" },
             ));
         }
         let [a1p, a2p]: [Panel; 2] = amp_p.try_into().expect("two panels");
