@@ -85,8 +85,9 @@ pub struct CaseSpec {
     /// Keep the top-floor displacement histories of the contact floors.
     pub history: bool,
     /// Run this many times and keep the fastest wall time (cost studies). A timed case
-    /// (`repeat` > 1) runs alone: after the study's other cases, one at a time, so no other
-    /// case shares the machine with it (see [`run_cases`]).
+    /// (`repeat` > 1) runs alone: after the study's other cases, one analysis at a time, so
+    /// no other case shares the machine with it, and in rounds with the other timed cases
+    /// (every one once, then again; see [`run_interleaved`]).
     pub repeat: u32,
     /// Labels for tables; not part of the id.
     pub params: BTreeMap<String, serde_json::Value>,
@@ -401,12 +402,12 @@ fn failed(spec: &CaseSpec, kind: &str, msg: String, wall: f64) -> CaseResult {
     }
 }
 
-/// Runs one case (never panics: a panic inside the solver becomes a failed case).
-pub fn run_case(spec: &CaseSpec, studies_dir: &Path) -> CaseResult {
-    let mut scene = match spec.load_scene(studies_dir) {
-        Ok(s) => s,
-        Err(e) => return failed(spec, "Scene", e, 0.0),
-    };
+/// The scene of a case as it runs: the file with the case's overrides, and for a baseline
+/// every contact moved 1 km apart. A scene that cannot be read is the case's failed result.
+fn prepare(spec: &CaseSpec, studies_dir: &Path) -> std::result::Result<Scene, Box<CaseResult>> {
+    let mut scene = spec
+        .load_scene(studies_dir)
+        .map_err(|e| Box::new(failed(spec, "Scene", e, 0.0)))?;
     if spec.params.contains_key("baseline") {
         // The same model without contact: every contact (not only entry 0 of the file, which
         // the override moved) 1 km apart, so a scene with several contact entries has no
@@ -415,36 +416,146 @@ pub fn run_case(spec: &CaseSpec, studies_dir: &Path) -> CaseResult {
             c.gap = 1000.0;
         }
     }
-    let mut best = f64::INFINITY;
+    Ok(scene)
+}
+
+/// One analysis of a case and its wall time (s); a solver error or a panic is the case's
+/// failed result, with that run's wall time.
+fn run_once(
+    spec: &CaseSpec,
+    scene: &Scene,
+) -> std::result::Result<(solvers::RunOutput, Option<History>, f64), Box<CaseResult>> {
+    let t0 = Instant::now();
+    let res = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        let mut hist = spec.history.then(History::default);
+        let r = solvers::run(scene, spec.method, hist.as_mut());
+        (r, hist)
+    }));
+    let wall = t0.elapsed().as_secs_f64();
+    match res {
+        Err(p) => {
+            let msg = p
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| p.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "panic".into());
+            Err(Box::new(failed(spec, "Panic", msg, wall)))
+        }
+        Ok((Err(e), _)) => Err(Box::new(failed(
+            spec,
+            solver_error_kind(&e),
+            e.to_string(),
+            wall,
+        ))),
+        Ok((Ok(run), hist)) => Ok((run, hist, wall)),
+    }
+}
+
+/// Runs one case `repeat` times in a row (never panics: a panic inside the solver becomes a
+/// failed case). [`run_cases`] runs the timed cases of a sweep by [`run_interleaved`]
+/// instead.
+pub fn run_case(spec: &CaseSpec, studies_dir: &Path) -> CaseResult {
+    let scene = match prepare(spec, studies_dir) {
+        Ok(s) => s,
+        Err(f) => return *f,
+    };
     let mut walls = Vec::with_capacity(spec.repeat.max(1) as usize);
     let mut last = None;
     for _ in 0..spec.repeat.max(1) {
-        let want_hist = spec.history;
-        let t0 = Instant::now();
-        let res = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            let mut hist = want_hist.then(History::default);
-            let r = solvers::run(&scene, spec.method, hist.as_mut());
-            (r, hist)
-        }));
-        let wall = t0.elapsed().as_secs_f64();
-        best = best.min(wall);
-        walls.push(wall);
-        match res {
-            Err(p) => {
-                let msg = p
-                    .downcast_ref::<&str>()
-                    .map(|s| s.to_string())
-                    .or_else(|| p.downcast_ref::<String>().cloned())
-                    .unwrap_or_else(|| "panic".into());
-                return failed(spec, "Panic", msg, wall);
+        match run_once(spec, &scene) {
+            Ok((run, hist, wall)) => {
+                walls.push(wall);
+                last = Some((run, hist));
             }
-            Ok((Err(e), _)) => {
-                return failed(spec, solver_error_kind(&e), e.to_string(), wall);
-            }
-            Ok((Ok(run), hist)) => last = Some((run, hist)),
+            Err(f) => return *f,
         }
     }
     let (run, hist) = last.expect("at least one repetition");
+    result(spec, &scene, run, hist, walls)
+}
+
+/// The order in which [`run_interleaved`] runs the repeats of cases with these `repeat`
+/// counts: rounds, each running once every case that has repeats left, in case order
+/// (`[2, 3, 1]` gives cases 0, 1, 2, 0, 1, 1).
+pub fn rounds(repeats: &[u32]) -> Vec<usize> {
+    let most = repeats.iter().map(|&r| r.max(1)).max().unwrap_or(0);
+    (0..most)
+        .flat_map(|round| {
+            repeats
+                .iter()
+                .enumerate()
+                .filter(move |(_, &r)| round < r.max(1))
+                .map(|(i, _)| i)
+        })
+        .collect()
+}
+
+/// Runs timed cases one analysis at a time in [`rounds`]: every case once, then every case
+/// again, and so on, so that a slow spell of a shared machine falls on one repeat of many
+/// settings, which the fastest of the repeats then leaves out, rather than on every repeat of
+/// one setting (the ratios of a cost study compare settings). A case that fails is not run
+/// again. `done` is called with each case's result as it completes (never panics).
+pub fn run_interleaved(
+    specs: &[&CaseSpec],
+    studies_dir: &Path,
+    mut done: impl FnMut(&CaseSpec, CaseResult) -> Result<()>,
+) -> Result<()> {
+    /// A timed case between rounds: its scene, the wall times so far and the last run.
+    struct Running {
+        scene: Scene,
+        walls: Vec<f64>,
+        last: Option<(solvers::RunOutput, Option<History>)>,
+    }
+    let mut running: Vec<Option<Running>> = Vec::with_capacity(specs.len());
+    // Cases whose scene cannot be read are done before any analysis.
+    for spec in specs {
+        match prepare(spec, studies_dir) {
+            Ok(scene) => running.push(Some(Running {
+                scene,
+                walls: Vec::new(),
+                last: None,
+            })),
+            Err(f) => {
+                running.push(None);
+                done(spec, *f)?;
+            }
+        }
+    }
+    let repeats: Vec<u32> = specs.iter().map(|s| s.repeat.max(1)).collect();
+    for i in rounds(&repeats) {
+        let (spec, slot) = (specs[i], &mut running[i]);
+        let Some(r) = slot else {
+            continue;
+        };
+        match run_once(spec, &r.scene) {
+            Ok((run, hist, wall)) => {
+                r.walls.push(wall);
+                r.last = Some((run, hist));
+            }
+            Err(f) => {
+                *slot = None;
+                done(spec, *f)?;
+                continue;
+            }
+        }
+        if r.walls.len() == repeats[i] as usize {
+            let r = slot.take().expect("running");
+            let (run, hist) = r.last.expect("a repeat ran");
+            done(spec, result(spec, &r.scene, run, hist, r.walls))?;
+        }
+    }
+    Ok(())
+}
+
+/// The finished case: outputs of its last analysis, the wall times of every repeat.
+fn result(
+    spec: &CaseSpec,
+    scene: &Scene,
+    run: solvers::RunOutput,
+    hist: Option<History>,
+    walls: Vec<f64>,
+) -> CaseResult {
+    let best = walls.iter().copied().fold(f64::INFINITY, f64::min);
     let rs: Vec<f64> = run
         .impacts
         .iter()
@@ -842,7 +953,15 @@ pub fn run_cases(specs: &[CaseSpec], opts: &EngineOptions) -> Result<RunSummary>
     };
     let work = || -> Vec<Result<bool>> {
         let mut out: Vec<Result<bool>> = parallel.par_iter().map(one).collect();
-        out.extend(alone.iter().map(one));
+        let timed = run_interleaved(&alone, &opts.studies_dir, |s, r| {
+            out.push(Ok(r.status != "ok"));
+            write_json(&case_path(&opts.study_dir, &s.id), &r)?;
+            bar.inc(1);
+            Ok(())
+        });
+        if let Err(e) = timed {
+            out.push(Err(e));
+        }
         out
     };
     let results = match opts.threads {
@@ -869,7 +988,8 @@ pub fn run_cases(specs: &[CaseSpec], opts: &EngineOptions) -> Result<RunSummary>
 }
 
 /// The cases to run in parallel and the timed cases (`repeat` > 1), which run after them one
-/// at a time: a case timed while another runs beside it measures the other case too (on the
+/// analysis at a time, in rounds ([`run_interleaved`]): a case timed while another runs
+/// beside it measures the other case too (on the
 /// 2-core development machine, in one measurement, the momentum method took 2.99 ms per
 /// analysis in the cost
 /// study run two cases at a time, 2.36 ms run alone, and the adaptive gap element 10.1 and

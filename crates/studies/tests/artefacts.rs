@@ -338,6 +338,13 @@ fn committed_cases_name_each_record_once() {
 }
 
 #[test]
+fn committed_texts_count_their_nouns() {
+    let results = repo().join("results");
+    let texts = find(&results, &|n| n.ends_with(".md") || n.ends_with(".csv"));
+    assert!(check_plurals(&texts) >= 30);
+}
+
+#[test]
 fn committed_summaries_link_existing_images() {
     let results = repo().join("results");
     if results.is_dir() {

@@ -179,6 +179,46 @@ fn timed_cases_run_alone_after_the_others() {
     let res = studies::sweep::collect("t", &specs, &out).unwrap();
     assert_eq!(res.get(&t1).wall_seconds_all.len(), 3);
     assert_eq!(res.get(&u1).wall_seconds_all.len(), 1);
+    // The timed cases ran in rounds (t1, t2, t1, t2, t1), each with the outputs of one
+    // analysis run alone.
+    assert_eq!(studies::sweep::rounds(&[3, 2]), vec![0, 1, 0, 1, 0]);
+    assert_eq!(studies::sweep::rounds(&[2, 3, 1]), vec![0, 1, 2, 0, 1, 1]);
+    assert_eq!(studies::sweep::rounds(&[0, 1]), vec![0, 1]);
+    assert!(studies::sweep::rounds(&[]).is_empty());
+    for t in [&t1, &t2] {
+        let alone = studies::sweep::run_case(&t.clone().repeat(1), &studies_dir());
+        assert_eq!(res.get(t).outputs, alone.outputs);
+        let w = &res.get(t).wall_seconds_all;
+        assert_eq!(
+            res.get(t).wall_seconds,
+            w.iter().copied().fold(f64::INFINITY, f64::min)
+        );
+    }
+}
+
+/// A timed case that fails is written once, with its error, and not run again; the other
+/// timed cases run all their repeats.
+#[test]
+fn failing_timed_cases_stop_at_their_failure() {
+    let base = CaseSpec::new("paper/scene.toml", solvers::Method::Momentum)
+        .with("contacts.0.restitution", "0.5")
+        .with("analysis.duration", "10.0");
+    let storm = base
+        .clone()
+        .with("momentum.persistent_contact", "false")
+        .repeat(3);
+    let bad = base.clone().with("contacts.0.restitution", "1.5").repeat(2);
+    let good = base.clone().repeat(2);
+    let specs = vec![storm.clone(), bad.clone(), good.clone()];
+    let out = tmp("timed-fail");
+    let s = run_cases(&specs, &engine(out.clone(), true)).unwrap();
+    assert_eq!((s.ran, s.failed), (3, 2));
+    let res = studies::sweep::collect("t", &specs, &out).unwrap();
+    assert_eq!(res.get(&storm).error_kind.as_deref(), Some("Stalled"));
+    assert_eq!(res.get(&storm).wall_seconds_all.len(), 1);
+    assert_eq!(res.get(&bad).error_kind.as_deref(), Some("Scene"));
+    assert_eq!(res.get(&good).status, "ok");
+    assert_eq!(res.get(&good).wall_seconds_all.len(), 2);
 }
 
 /// A Slurm job array gives the shard; variables that are there but do not give one (not

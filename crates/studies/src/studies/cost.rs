@@ -274,7 +274,8 @@ impl Study for Cost {
             &format!(
                 "Accuracy against wall time: fastest, median and slowest of {} (machine-dependent; \
                 each timed case runs alone, after the untimed ones, so the spread is the machine's \
-                own noise)",
+                own noise; the timed cases run in rounds, every setting once per round, so a slow \
+                spell of the machine falls on one repeat of many settings, not on every repeat of one)",
                 crate::table::count(d.repeat, "run", "runs")
             ),
             &[
