@@ -901,7 +901,8 @@ fn remove_orphans(specs: &[CaseSpec], study_dir: &Path) -> Result<()> {
 }
 
 /// Runs the cases that have no case file yet (and belong to the shard), in parallel,
-/// writing each case file as soon as it is done.
+/// writing each case file as soon as it is done; then the timed cases ([`schedule`]), one
+/// analysis at a time in rounds ([`run_interleaved`]), each written after its last repeat.
 pub fn run_cases(specs: &[CaseSpec], opts: &EngineOptions) -> Result<RunSummary> {
     let mut summary = RunSummary {
         total: specs.len(),

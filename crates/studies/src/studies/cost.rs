@@ -220,12 +220,29 @@ fn spread(r: &CaseResult) -> (f64, f64, f64) {
     (q(0.0), q(0.5), q(1.0))
 }
 
+/// The range (least, greatest) of a setting's wall time over the reference's, round by round
+/// (repeat i of each ran in round i of the timed cases, [`crate::sweep::run_interleaved`]);
+/// None without two or more repeats of each, the same number.
+fn round_ratios(r: &CaseResult, reference: &CaseResult) -> Option<(f64, f64)> {
+    let (a, b) = (&r.wall_seconds_all, &reference.wall_seconds_all);
+    (a.len() >= 2 && a.len() == b.len()).then(|| {
+        a.iter()
+            .zip(b)
+            .map(|(x, y)| x / y)
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), q| {
+                (lo.min(q), hi.max(q))
+            })
+    })
+}
+
 /// One measured point of the figure and the CPU table.
 struct Measured {
     family: Family,
     label: String,
     error: f64,
     wall: (f64, f64, f64),
+    /// Its time over the reference's, least and greatest over the rounds ([`round_ratios`]).
+    rounds: Option<(f64, f64)>,
 }
 
 impl Study for Cost {
@@ -352,6 +369,7 @@ impl Study for Cost {
                     label: p.label.clone(),
                     error: err,
                     wall: spread(r),
+                    rounds: round_ratios(r, res.get(&ref_case)),
                 });
             }
         }
@@ -539,7 +557,7 @@ impl Study for Cost {
                             .map(|q| format!("{} {:.1}×", q.label, q.wall.0 / ref_wall.0))
                             .collect();
                         format!(
-                            "Within {:.0} % of rigid impact the fastest gap-element setting is {} at {:.2e} s: **{:.1}×** the momentum method's fastest time (median against median {:.1}×; slowest-to-fastest range over the repeats {:.1}–{:.1}×){}.",
+                            "Within {:.0} % of rigid impact the fastest gap-element setting is {} at {:.2e} s: **{:.1}×** the momentum method's fastest time (median against median {:.1}×; slowest-to-fastest range over the repeats {:.1}–{:.1}×{}){}.",
                             acc * 100.0,
                             g.label,
                             g.wall.0,
@@ -547,6 +565,9 @@ impl Study for Cost {
                             g.wall.1 / ref_wall.1,
                             g.wall.0 / ref_wall.2,
                             g.wall.2 / ref_wall.0,
+                            g.rounds.map_or(String::new(), |(lo, hi)| format!(
+                                "; round by round, each repeat against the reference's of the same round, {lo:.1}–{hi:.1}×"
+                            )),
                             if near.is_empty() {
                                 String::new()
                             } else {
@@ -594,5 +615,34 @@ fn shrink(ctx: &Ctx, d: &mut Def) {
         d.newmark_stiffness.truncate(1);
         d.newmark_step.truncate(1);
         d.repeat = 1;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn timed(walls: &[f64]) -> CaseResult {
+        CaseResult {
+            spec: CaseSpec::new("paper/scene.toml", solvers::Method::Momentum),
+            status: "ok".into(),
+            error_kind: None,
+            error: None,
+            outputs: None,
+            wall_seconds: walls.iter().copied().fold(f64::INFINITY, f64::min),
+            wall_seconds_all: walls.to_vec(),
+        }
+    }
+
+    #[test]
+    fn round_ratios_pair_the_repeats_of_a_round() {
+        // Round 2 was slow for both: its ratio is 4 like round 1's; round 3 only for the
+        // reference. Fastest against fastest would say 4, slowest-to-fastest 2–8.
+        let reference = timed(&[1.0, 2.0, 2.0]);
+        let gap = timed(&[4.0, 8.0, 4.0]);
+        assert_eq!(round_ratios(&gap, &reference), Some((2.0, 4.0)));
+        // One repeat, or unequal counts: no rounds to pair.
+        assert_eq!(round_ratios(&timed(&[4.0]), &timed(&[1.0])), None);
+        assert_eq!(round_ratios(&timed(&[4.0, 5.0]), &reference), None);
     }
 }
