@@ -1114,7 +1114,7 @@ fn studies_command(command: StudiesCommand) -> Result<()> {
 
 /// Cases of a sweep that did not finish as defined (exit code 4).
 #[derive(Debug, thiserror::Error)]
-#[error("{} failed (listed in each study's summary.md):\n  {}", structure::count(.0.len(), "case", "cases"), .0.join("\n  "))]
+#[error("{} failed (listed in each study's summary.md):\n  {}", studies::table::count(.0.len(), "case", "cases"), .0.join("\n  "))]
 struct FailedCases(Vec<String>);
 
 fn failed_cases(unexpected: &[String]) -> Result<()> {

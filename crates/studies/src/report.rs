@@ -479,7 +479,7 @@ pub fn overlap_warnings(run: &RunOutput) -> Vec<String> {
     if let Some(o) = solvers::overlap::worst(&run.overlaps).filter(|o| o.max_overlap > 0.0) {
         w.push(format!(
             "{} without a contact overlapped beyond the gap; worst: {} floor {} / {} floor {} by {:.4} m at {:.3} s (add contacts, e.g. floors = \"aligned\")",
-            structure::count(beyond, "facing floor pair", "facing floor pairs"),
+            crate::table::count(beyond, "facing floor pair", "facing floor pairs"),
             o.left, o.left_floor, o.right, o.right_floor, o.max_overlap, o.time
         ));
     }

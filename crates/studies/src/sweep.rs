@@ -802,7 +802,7 @@ impl Shard {
         if count < 1 || index < 1 || index > count {
             return Err(format!(
                 "SLURM_ARRAY_TASK_ID = {id} is outside the array's {} from {min}: give --shard i/n",
-                structure::count(count, "task", "tasks")
+                crate::table::count(count, "task", "tasks")
             ));
         }
         Ok(Some(Shard {
@@ -945,19 +945,19 @@ pub fn run_cases(specs: &[CaseSpec], opts: &EngineOptions) -> Result<RunSummary>
         indicatif::ProgressBar::hidden()
     };
     let (parallel, alone) = schedule(&todo);
-    let one = |s: &&CaseSpec| -> Result<bool> {
-        let r = run_case(s, &opts.studies_dir);
-        let bad = r.status != "ok";
+    // A finished case: its file written; whether it failed.
+    let record = |s: &CaseSpec, r: CaseResult| -> Result<bool> {
         write_json(&case_path(&opts.study_dir, &s.id), &r)?;
         bar.inc(1);
-        Ok(bad)
+        Ok(r.status != "ok")
     };
     let work = || -> Vec<Result<bool>> {
-        let mut out: Vec<Result<bool>> = parallel.par_iter().map(one).collect();
+        let mut out: Vec<Result<bool>> = parallel
+            .par_iter()
+            .map(|s| record(s, run_case(s, &opts.studies_dir)))
+            .collect();
         let timed = run_interleaved(&alone, &opts.studies_dir, |s, r| {
-            out.push(Ok(r.status != "ok"));
-            write_json(&case_path(&opts.study_dir, &s.id), &r)?;
-            bar.inc(1);
+            out.push(Ok(record(s, r)?));
             Ok(())
         });
         if let Err(e) = timed {

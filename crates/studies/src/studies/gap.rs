@@ -492,10 +492,14 @@ impl Study for Gap {
             if exact_max <= gmax {
                 "the gap grid extends past it for every record, so every curve ends with no contact.".to_string()
             } else {
-                match exacts.iter().filter(|&&x| x > gmax).count() {
-                    1 => "1 record still pounds at the largest gap of the grid.".to_string(),
-                    n => format!("{n} records still pound at the largest gap of the grid."),
-                }
+                format!(
+                    "{} at the largest gap of the grid.",
+                    crate::table::count(
+                        exacts.iter().filter(|&&x| x > gmax).count(),
+                        "record still pounds",
+                        "records still pound"
+                    )
+                )
             }
         ));
         let ratio = |q: usize| Spread::of(seps.iter().flatten().map(|s| s[q] / s[0]));

@@ -392,8 +392,8 @@ pub fn all_cases(st: &dyn Study, ctx: &Ctx) -> Result<Vec<CaseSpec>> {
                     "study `{}` needs a scene with two buildings joined by a contact; `{}` has {} and {}",
                     ctx.name,
                     first.scene,
-                    structure::count(scene.buildings.len(), "building", "buildings"),
-                    structure::count(scene.contacts.len(), "contact", "contacts")
+                    crate::table::count(scene.buildings.len(), "building", "buildings"),
+                    crate::table::count(scene.contacts.len(), "contact", "contacts")
                 ),
             });
         }

@@ -339,7 +339,7 @@ impl Study for ModelForm {
         let g = grid(ctx, &d);
         let head = g.records[0].as_str();
         let head_label = record_label(head);
-        let n_rec = structure::count(g.records.len(), "record", "records");
+        let n_rec = crate::table::count(g.records.len(), "record", "records");
         let c = |v: &Variant, rec: &str, gap: f64, cr: f64, run: Run| {
             case(ctx, &d, &scene, v, rec, (gap, cr, run))
         };

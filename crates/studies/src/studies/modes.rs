@@ -298,14 +298,14 @@ impl Study for Modes {
                 Some((e, worst_n)) => format!(
                     "the achieved restitution falls to {} (worst impact of any record) with {} (target {})",
                     f(Some(e), 3),
-                    structure::count(worst_n, "mode", "modes"),
+                    crate::table::count(worst_n, "mode", "modes"),
                     d.restitution
                 ),
                 None => "no impact has a defined restitution".into(),
             };
             let (m0, m1) = (
-                structure::count(n0, "mode", "modes"),
-                structure::count(n1, "mode", "modes"),
+                crate::table::count(n0, "mode", "modes"),
+                crate::table::count(n1, "mode", "modes"),
             );
             reading.push(format!(
                 "{var} impulse ({} of {} records pound with {m1}): the contact-story amplification of building 1, median (16–84 %), goes from {} with {m0} to {} with {m1}, of building 2 from {} to {}; with 10 modes {} and {}; {restitution}.",

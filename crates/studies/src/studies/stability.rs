@@ -332,7 +332,7 @@ impl Study for Stability {
             }
         }
         if let Some(p) = vp.first() {
-            reading.push(format!("The paper's floor-mass impulse with {} violates the restitution law by up to {:.2} and with {} by {:.1e}.", structure::count(p.0, "mode", "modes"), p.1, structure::count(vp.last().map_or(0.0, |q| q.0), "mode", "modes"), vp.last().map_or(0.0, |q| q.1)));
+            reading.push(format!("The paper's floor-mass impulse with {} violates the restitution law by up to {:.2} and with {} by {:.1e}.", crate::table::count(p.0, "mode", "modes"), p.1, crate::table::count(vp.last().map_or(0.0, |q| q.0), "mode", "modes"), vp.last().map_or(0.0, |q| q.1)));
         }
         // (d) chattering.
         let mut tc = Table::new(

@@ -570,7 +570,7 @@ impl Study for Stiffness {
             let one = no_contact.len() == 1;
             reading.push(format!(
                 "{} at this gap ({}); {} left out of every statistic ({} gap-element error is integration error only) and kept in stiffness_all.csv.",
-                structure::count(no_contact.len(), "record never pounds", "records never pound"),
+                crate::table::count(no_contact.len(), "record never pounds", "records never pound"),
                 no_contact.join(", "),
                 if one { "it is" } else { "they are" },
                 if one { "its" } else { "their" },

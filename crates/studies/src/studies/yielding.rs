@@ -544,7 +544,7 @@ impl Study for Yielding {
         let mut strength_t = Table::new(
             &format!(
                 "Strength of every story: F_y = median over the {} of the elastic no-contact peak story shear at {} g (momentum method, all modes); yield drift F_y / k0; hardening ratio {}",
-                structure::count(recs.len(), "record", "records"),
+                crate::table::count(recs.len(), "record", "records"),
                 d.reference_pga,
                 d.hardening_ratio
             ),
@@ -1000,7 +1000,7 @@ impl Study for Yielding {
             &[PanelKind::Xy(p1), PanelKind::Xy(p2)],
             &format!(
                 "Domain of validity of the elastic momentum method (all modes) on {} of the paper pair, contact at every floor, gap {} cm, c_r = {}; strength per story = median elastic demand at {} g. e = max over the two buildings of |elastic / inelastic − 1| per record: top-story shear amplification (blue), peak story drift with pounding (orange), without (green). Top: share of records with e > {:.0} % against {}{}; vertical lines where half the records depart. Bottom: median (solid) and 16th–84th percentiles (thin dashed) of e; grey: {:.0} %.",
-                structure::count(recs.len(), "record", "records"),
+                crate::table::count(recs.len(), "record", "records"),
                 d.gap * 100.0,
                 d.restitution,
                 d.reference_pga,
@@ -1033,9 +1033,9 @@ impl Study for Yielding {
             .count();
         let mname = |mi: usize| method_label(ms[mi]);
         reading.push(format!(
-            "**Set-up.** {} ({np} with a velocity pulse) at {} PGA levels from {pga_lo} to {pga_hi} g. Strength: the yield shear of every story is the median over the records of its elastic no-contact peak shear at {} g (table `yielding_strength`), the same for every record and level, so the median elastic demand over strength is R = PGA / {} g, from {:.2} to {:.2}; a given record's own ratio scatters about it. Elastic: the momentum method with all modes (linear stories; it cannot yield). Inelastic: {} with bilinear stories (post-yield stiffness {} × k0, kinematic hardening).",
-            structure::count(recs.len(), "record", "records"),
-            lv.len(),
+            "**Set-up.** {} ({np} with a velocity pulse) at {} from {pga_lo} to {pga_hi} g. Strength: the yield shear of every story is the median over the records of its elastic no-contact peak shear at {} g (table `yielding_strength`), the same for every record and level, so the median elastic demand over strength is R = PGA / {} g, from {:.2} to {:.2}; a given record's own ratio scatters about it. Elastic: the momentum method with all modes (linear stories; it cannot yield). Inelastic: {} with bilinear stories (post-yield stiffness {} × k0, kinematic hardening).",
+            crate::table::count(recs.len(), "record", "records"),
+            crate::table::count(lv.len(), "PGA level", "PGA levels"),
             d.reference_pga,
             d.reference_pga,
             r_of(pga_lo),
