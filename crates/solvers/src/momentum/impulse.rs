@@ -188,12 +188,12 @@ impl Factored {
                 b[i] -= a[i][k] * b[k];
             }
         }
-        let mut x = vec![0.0; n];
+        // Back substitution in place: b[j] holds x_j once row j is done (j > k).
         for k in (0..n).rev() {
-            let s: f64 = (k + 1..n).map(|j| a[k][j] * x[j]).sum();
-            x[k] = (b[k] - s) / a[k][k];
+            let s: f64 = (k + 1..n).map(|j| a[k][j] * b[j]).sum();
+            b[k] = (b[k] - s) / a[k][k];
         }
-        x.iter().all(|v| v.is_finite()).then_some(x)
+        b.iter().all(|v| v.is_finite()).then_some(b)
     }
 }
 
@@ -329,7 +329,17 @@ pub fn add_touching(
 
 /// Applies Δq̇ = −Σ g_c P_c.
 pub fn apply(contacts: &[ContactGeom], impulses: &[(usize, f64)], v: &mut [f64]) {
-    for &(c, p) in impulses {
+    apply_set(contacts, impulses.iter().copied(), v);
+}
+
+/// [`apply`] of the pairs (contact, impulse) `impulses` yields, in its order (the same
+/// operations: no list of pairs is built).
+pub fn apply_set(
+    contacts: &[ContactGeom],
+    impulses: impl IntoIterator<Item = (usize, f64)>,
+    v: &mut [f64],
+) {
+    for (c, p) in impulses {
         for (vn, gn) in v.iter_mut().zip(&contacts[c].g) {
             *vn -= gn * p;
         }

@@ -319,11 +319,11 @@ impl Stepper<'_> {
             )
         };
         // Modal loads −Σ_c g_c λ_c at the start (the instantaneous forces) and at the end.
-        let forces = |lam: &[f64]| -> Vec<(usize, f64)> {
-            set.iter().copied().zip(lam.iter().copied()).collect()
-        };
+        fn forces<'l>(set: &'l [usize], lam: &'l [f64]) -> impl Iterator<Item = (usize, f64)> + 'l {
+            set.iter().copied().zip(lam.iter().copied())
+        }
         let mut loads = vec![0.0; 2 * nm];
-        impulse::apply(&p.contacts, &forces(lam0), &mut loads[..nm]);
+        impulse::apply_set(&p.contacts, forces(set, lam0), &mut loads[..nm]);
         // The transcendental part of every mode's arcs at s (the end, shared by the start
         // forces' arc and ψ) and at s/2 (the middle), computed once per trial in vectors.
         let mut guard = self.held_scratch.borrow_mut();
@@ -356,7 +356,7 @@ impl Stepper<'_> {
             sc.psi_len = s;
         }
         let lam = ramp_end_forces(&p.contacts, set, &sc.psi, &dpart, self.s.t)?;
-        impulse::apply(&p.contacts, &forces(&lam), &mut loads[nm..]);
+        impulse::apply_set(&p.contacts, forces(set, &lam), &mut loads[nm..]);
         for n in 0..nm {
             x[n] += loads[nm + n] * sc.psi[n];
             v[n] += loads[nm + n] * sc.dpsi[n];
