@@ -452,26 +452,16 @@ fn run_once(
 }
 
 /// Runs one case `repeat` times in a row (never panics: a panic inside the solver becomes a
-/// failed case). [`run_cases`] runs the timed cases of a sweep by [`run_interleaved`]
-/// instead.
+/// failed case): [`run_interleaved`] with this case alone. [`run_cases`] runs the timed
+/// cases of a sweep together, in rounds.
 pub fn run_case(spec: &CaseSpec, studies_dir: &Path) -> CaseResult {
-    let scene = match prepare(spec, studies_dir) {
-        Ok(s) => s,
-        Err(f) => return *f,
-    };
-    let mut walls = Vec::with_capacity(spec.repeat.max(1) as usize);
-    let mut last = None;
-    for _ in 0..spec.repeat.max(1) {
-        match run_once(spec, &scene) {
-            Ok((run, hist, wall)) => {
-                walls.push(wall);
-                last = Some((run, hist));
-            }
-            Err(f) => return *f,
-        }
-    }
-    let (run, hist) = last.expect("at least one repetition");
-    result(spec, &scene, run, hist, walls)
+    let mut out = None;
+    run_interleaved(&[spec], studies_dir, |_, r| {
+        out = Some(r);
+        Ok(())
+    })
+    .expect("the callback does not fail");
+    out.expect("a case always has a result")
 }
 
 /// The order in which [`run_interleaved`] runs the repeats of cases with these `repeat`
