@@ -83,7 +83,7 @@ fn plastic_pair_releases_where_the_holding_force_turns_tensile() {
         let first = out
             .persistent_contacts
             .first()
-            .unwrap_or_else(|| panic!("dt {dt}: no persistent phase: {:?}", out.impacts));
+            .unwrap_or_else(|| panic!("tol {tol}: no persistent phase: {:?}", out.impacts));
         assert_eq!(first.released_by, "tension");
         // The phase starts once the gap has closed by its round-off band (1e-13 m here,
         // reached after 2.7e-5 s: δ grows as t³ from the plastic impact).

@@ -163,5 +163,14 @@ fn persistent_contact_walls_and_truncated_modes_keep_the_balance() {
             m.persistent_contacts.len()
         );
         assert!(e.balance_error.abs() < 1e-13 * e.input, "{what}: {e:?}");
+        // The path named must be taken: a held phase when touching, impacts otherwise.
+        if what.starts_with("touching") {
+            assert!(
+                !m.persistent_contacts.is_empty(),
+                "{what}: no persistent phase"
+            );
+        } else {
+            assert!(!m.impacts.is_empty(), "{what}: no impact");
+        }
     }
 }
