@@ -103,8 +103,15 @@ pub enum SolverError {
         residual: f64,
         context: String,
     },
-    #[error("step budget exhausted at t = {time:.9} s: {steps} steps taken, limit {limit} (analysis.max_steps)")]
-    StepBudget { time: f64, steps: u64, limit: u64 },
+    /// `context`: the state when the budget ran out (the step size, the contacts closed or
+    /// held, the impacts so far).
+    #[error("step budget exhausted at t = {time:.9} s: {steps} steps taken, limit {limit} (analysis.max_steps); {context}")]
+    StepBudget {
+        time: f64,
+        steps: u64,
+        limit: u64,
+        context: String,
+    },
     #[error("event storm at t = {time:.9} s: {impacts} impacts in {window:.3e} s exceed the limit of {limit} impacts per second (analysis.max_impact_rate); {context}")]
     EventStorm {
         time: f64,

@@ -338,14 +338,24 @@ fn a_floor_pushed_against_a_wall_is_held_until_the_force_turns_tensile() {
         "peak {umax}"
     );
     // The history's contact force is the holding force λ = m(−a_g) − K g while held.
+    let in_window = |t: f64| t > held[0].start + 1e-3 && t < 0.3;
+    let mut compared = 0;
     for (k, &t) in hist.time.iter().enumerate() {
-        if t > held[0].start + 1e-3 && t < 0.3 {
+        if in_window(t) {
             let lam = M * 6.0 - K * GAP;
             let f = hist.contact_force[k][0];
-            // λ is computed from the held state's closed form: round-off (passes at 1e-12).
-            assert!((f - lam).abs() <= 1e-10 * lam, "t = {t}: {f} vs {lam}");
+            // λ is computed from the held state's closed form: round-off of a few operations
+            // (measured equal to the last bit on every row), 4 ε.
+            assert!(
+                (f - lam).abs() <= 4.0 * f64::EPSILON * lam,
+                "t = {t}: {f} vs {lam}"
+            );
+            compared += 1;
         }
     }
+    // A row at every record point of the window (23, 0.07 … 0.29 s).
+    let record_points = (0..=60).filter(|&k| in_window(k as f64 * dt)).count();
+    assert_eq!((compared, record_points), (23, 23));
     assert!(
         out.energy.balance_error.abs() <= 1e-9 * out.energy.input.abs(),
         "{:?}",
@@ -454,8 +464,14 @@ fn chattering_ends_in_persistent_contact_as_in_the_momentum_method() {
     assert_eq!(mom.impacts.len(), imp.impacts.len());
     assert_eq!(mom.persistent_contacts.len(), imp.persistent_contacts.len());
     // Under a constant push the holding force is nearly constant, so the momentum method's
-    // constant force per step is nearly exact (measured 5e-10; passes at 1e-9).
-    assert!(peak_diff(&mom, &imp) < 1e-8);
+    // held segments are nearly exact: the difference is the impulse method's integration
+    // error. It follows its tolerance (measured 4.9e-10, 4.0e-11 and 4.0e-12 at 1e-8, 1e-9
+    // and 1e-10) and not the momentum method's held tolerance (the same 4.9e-10 at 1e-5 …
+    // 1e-8): asserted below a fifth of the tolerance (4 times the measured 4.9e-10 at the
+    // default 1e-8).
+    let tol = scene.gap_element.tolerance;
+    let d = peak_diff(&mom, &imp);
+    assert!(d < 0.2 * tol, "peaks differ by {d:e} at tolerance {tol:e}");
     let last = imp.persistent_contacts.last().unwrap();
     assert_eq!(last.released_by, "end of analysis");
     let e = &imp.energy;

@@ -111,6 +111,7 @@ fn paper_scene_roof_only_overlaps_at_mid_height_and_the_gap_element_converges_to
     };
     let (g12, g13, g14, g15) = (run("1e12"), run("1e13"), run("1e14"), run("1e15"));
     let err = |g: &RunOutput| -> Vec<f64> {
+        assert_eq!(floor_pairs(&g.overlaps), floor_pairs(&m.overlaps));
         g.overlaps
             .iter()
             .zip(&m.overlaps)

@@ -1036,7 +1036,9 @@ const IMPACT_GAP_RATIO: f64 = 1.01;
 
 /// The energy audits and impact books of the momentum and impulse methods. Catches a lost or
 /// double-counted work term, an impulse that creates energy or misses c_r, and, for the
-/// impulse method, a balance that does not follow its tolerance.
+/// impulse method, a balance that does not follow its tolerance (within `BALANCE_PER_TOL` ×
+/// tol at `TOL_COARSE` and `TOL_FINE`, and ten times smaller at the finer one once above
+/// `IMPULSE_FLOOR`).
 #[test]
 fn energy_audits_close() {
     sweep("energy", |c| {
@@ -1127,6 +1129,22 @@ fn energy_audits_close() {
         }
         let [coarse, fine] = impulse_balance;
         values.push(("impulse: balance at the fine tolerance", fine));
+        values.push((
+            "impulse: balance / tol at the coarse tolerance",
+            coarse / TOL_COARSE,
+        ));
+        values.push((
+            "impulse: balance / tol at the fine tolerance",
+            fine / TOL_FINE,
+        ));
+        for (balance, tol) in [(coarse, TOL_COARSE), (fine, TOL_FINE)] {
+            if !(balance <= BALANCE_PER_TOL * tol) {
+                return Verdict::Fail(format!(
+                    "impulse: balance error {balance:.3e} at tol {tol:e}, more than \
+                     {BALANCE_PER_TOL:e} × the tolerance"
+                ));
+            }
+        }
         if fine > IMPULSE_FLOOR {
             values.push((
                 "impulse: fine / coarse balance (above floor)",
@@ -1142,6 +1160,15 @@ fn energy_audits_close() {
         Verdict::Pass(values)
     });
 }
+
+/// The adaptive integrators' energy balance (impulse method, adaptive gap element), relative
+/// to the scale of its terms, is their integration error: at most this many times their
+/// tolerance, at every tolerance they run at. Measured over seeds 0 … 7999: the impulse
+/// method up to 221 × (seed 7973 at 1e-9; 217 × at 1e-11, seed 7924), the adaptive gap
+/// element up to 246 × (seed 7312 at 1e-8; 238 × at 1e-10, seed 5720; 5 × at 1e-12 where
+/// retried). A margin of four over eight thousand scenes: a balance that stops following the
+/// tolerance (a work term integrated apart from the motion) fails it.
+const BALANCE_PER_TOL: f64 = 1e3;
 
 /// Newmark's step in the comparison with the adaptive gap element, s.
 const NEWMARK_STEP: f64 = 1e-4;
@@ -1160,11 +1187,13 @@ const NEWMARK_PEAKS: f64 = 0.5;
 /// spring model. Neither may panic (an error must be a typed `SolverError`, counted); both
 /// must close their energy balance (Newmark's, less the work of its Newton residuals, to
 /// round-off: ε per step, as `gap_energy.rs` states; the adaptive integrator's must follow
-/// its tolerance: at least 10 times smaller at
-/// tol 1e-10 than at 1e-8, measured 14 to 100 times, up to 150 × tol in size, or else a
+/// its tolerance: within `BALANCE_PER_TOL` × tol at 1e-8 and 1e-10 (and at 1e-12 where
+/// retried), and at least 10 times smaller at
+/// tol 1e-10 than at 1e-8, measured 14 to 100 times, or else a
 /// hundred times below the larger of the two at 1e-12); their
 /// peaks must agree to `NEWMARK_PEAKS` when their contact episodes agree in number
-/// (near-grazing contacts switch on or off between the integrators: counted, skipped).
+/// (near-grazing contacts switch on or off between the integrators: the balances are checked,
+/// the seed is counted as skipped).
 #[test]
 fn gap_element_integrators_agree() {
     sweep("gap", gap_verdict);
@@ -1178,8 +1207,13 @@ fn newmark_rest(o: &RunOutput) -> f64 {
     (e.balance_error - w).abs() / e.input.abs().max(e.damping).max(e.initial)
 }
 
-/// Invariant 5 on one scene (the sweep's check).
-fn gap_verdict(c: &Case) -> Verdict {
+/// The measured values of a check, named (as in [`Verdict::Pass`]), with the adaptive and
+/// Newmark runs of invariant 5.
+type GapRuns = (Vec<(&'static str, f64)>, RunOutput, RunOutput);
+
+/// The adaptive and Newmark runs of invariant 5 with their energy balances checked: the
+/// measured values and the two runs, or the verdict that ends the check (a skip or a failure).
+fn gap_balances(c: &Case) -> Result<GapRuns, Verdict> {
     let mut ad = c.scene.clone();
     ad.gap_element.tolerance = 1e-10;
     let mut loose = c.scene.clone();
@@ -1193,11 +1227,11 @@ fn gap_verdict(c: &Case) -> Verdict {
     ) {
         (Ok(a), Ok(b)) => (a, b),
         (a, b) => {
-            return Verdict::Skip(format!(
+            return Err(Verdict::Skip(format!(
                 "adaptive {} / newmark {}",
                 a.err().map_or("Ok", |e| kind(&e)),
                 b.err().map_or("Ok", |e| kind(&e))
-            ))
+            )))
         }
     };
     let balance = |o: &RunOutput| {
@@ -1208,28 +1242,48 @@ fn gap_verdict(c: &Case) -> Verdict {
     let steps = (c.scene.duration / NEWMARK_STEP).ceil();
     let bl = match solvers::run(&loose, Method::Gap, None) {
         Ok(o) => balance(&o),
-        Err(e) => return Verdict::Skip(format!("adaptive at tol 1e-8: {}", kind(&e))),
+        Err(e) => return Err(Verdict::Skip(format!("adaptive at tol 1e-8: {}", kind(&e)))),
     };
     // The balance's terms are integrated with the motion: its error follows the
     // tolerance (20 to 100 times smaller at a 100 times tighter one measured, 10 asked),
-    // whatever the scene's constant (up to 150 × tol measured here). The error changes
+    // whatever the scene's constant (up to 246 × tol measured over seeds 0 … 7999; at most
+    // `BALANCE_PER_TOL` × tol asserted). The error changes
     // sign as the tolerance falls, so one ratio can fail where the trend holds (seeds
     // 2141, 2315, 2880: 3.3 to 9.6 times over 1e-8 … 1e-10, about tenfold per decade
     // over 1e-6 … 1e-12): then two decades further must bring it a hundredfold below
     // the larger of the two.
+    for (b, tol) in [(bl, 1e-8), (ba, 1e-10)] {
+        if !(b <= BALANCE_PER_TOL * tol) {
+            return Err(Verdict::Fail(format!(
+                "adaptive gap element: balance error {b:.3e} at tol {tol:e}, more than \
+                 {BALANCE_PER_TOL:e} × the tolerance"
+            )));
+        }
+    }
     let mut retried = None;
     if ba > 1e-12 && ba > bl / 10.0 {
         let mut tight = c.scene.clone();
         tight.gap_element.tolerance = 1e-12;
         let bt = match solvers::run(&tight, Method::Gap, None) {
             Ok(o) => balance(&o),
-            Err(e) => return Verdict::Skip(format!("adaptive at tol 1e-12: {}", kind(&e))),
+            Err(e) => {
+                return Err(Verdict::Skip(format!(
+                    "adaptive at tol 1e-12: {}",
+                    kind(&e)
+                )))
+            }
         };
+        if !(bt <= BALANCE_PER_TOL * 1e-12) {
+            return Err(Verdict::Fail(format!(
+                "adaptive gap element: balance error {bt:.3e} at tol 1e-12, more than \
+                 {BALANCE_PER_TOL:e} × the tolerance"
+            )));
+        }
         if !(bt <= bl.max(ba) / 100.0) {
-            return Verdict::Fail(format!(
+            return Err(Verdict::Fail(format!(
                 "adaptive gap element: balance error {bl:.3e} at tol 1e-8, {ba:.3e} at \
                  1e-10, {bt:.3e} at 1e-12"
-            ));
+            )));
         }
         retried = Some(bt);
     }
@@ -1241,14 +1295,14 @@ fn gap_verdict(c: &Case) -> Verdict {
     // times that).
     let rn = newmark_rest(&b);
     if !(rn <= f64::EPSILON * steps) {
-        return Verdict::Fail(format!(
+        return Err(Verdict::Fail(format!(
             "Newmark: balance error {bn:.3e}, less its Newton residuals' work {rn:.3e}, over \
              {steps} steps (ε per step: {:.3e})",
             f64::EPSILON * steps
-        ));
+        )));
     }
-    let (d, at) = peak_diff(&a, &b);
     if verbose() {
+        let (d, at) = peak_diff(&a, &b);
         eprintln!(
             "seed {}: episodes {}/{} peaks {d:.3e} ({at}); balance {ba:.3e} / {bn:.3e}; \
              adaptive {:.3} s, newmark {:.3} s",
@@ -1261,6 +1315,8 @@ fn gap_verdict(c: &Case) -> Verdict {
     }
     let mut v = vec![
         ("adaptive balance at tol 1e-10", ba),
+        ("adaptive balance / tol at 1e-8", bl / 1e-8),
+        ("adaptive balance / tol at 1e-10", ba / 1e-10),
         ("adaptive balance 1e-10 / 1e-8", ba / bl),
         (
             "newmark balance / (16 eps steps)",
@@ -1276,11 +1332,28 @@ fn gap_verdict(c: &Case) -> Verdict {
             "adaptive balance 1e-12 / max(1e-8, 1e-10), retried",
             bt / bl.max(ba),
         ));
+        v.push(("adaptive balance / tol at 1e-12, retried", bt / 1e-12));
     }
+    Ok((v, a, b))
+}
+
+/// Invariant 5 on one scene (the sweep's check): the balances ([`gap_balances`]), then the
+/// peaks where the two integrators find the same number of contact episodes. Where they do
+/// not (near-grazing contacts switch on or off between them) the balances were checked but
+/// the peaks cannot be compared: the seed is skipped, not counted as checked.
+fn gap_verdict(c: &Case) -> Verdict {
+    let (mut v, a, b) = match gap_balances(c) {
+        Ok(x) => x,
+        Err(verdict) => return verdict,
+    };
     if a.impacts.len() != b.impacts.len() {
-        v.push(("peaks with different episode counts (not asserted)", d));
-        return Verdict::Pass(v);
+        return Verdict::Skip(
+            "adaptive and Newmark find different numbers of contact episodes (balances \
+             checked, peaks not compared)"
+                .into(),
+        );
     }
+    let (d, at) = peak_diff(&a, &b);
     if !(d <= NEWMARK_PEAKS) {
         return Verdict::Fail(format!(
             "Newmark at {NEWMARK_STEP:e} s and the adaptive integrator: peaks differ by {d:.3e} ({at})"
@@ -1425,6 +1498,11 @@ fn linear_holding_forces_regressions() {
 fn captures_after_a_plastic_impulse_match_the_impulse_method() {
     for seed in [541, 1135] {
         let (case, mom, imp) = tight_pair(seed);
+        assert!(
+            !mom.persistent_contacts.is_empty(),
+            "seed {seed}: no held phase\n{}",
+            case.what
+        );
         assert_eq!(
             mom.persistent_contacts.len(),
             imp.persistent_contacts.len(),
@@ -1514,7 +1592,8 @@ fn held_phases_of_undamped_sticks_converge_as_the_held_tolerance() {
 ///   impacts only at 1e-14, a third decade past `TOL_FINE`;
 /// - held-out 4923 (held contacts): at 1e-13 (`held_verdict` retries two decades tighter);
 /// - 2141, 2315 and 2880: the adaptive gap element's balance error falls less than tenfold
-///   from tolerance 1e-8 to 1e-10 (its sign changes) and a hundredfold by 1e-12.
+///   from tolerance 1e-8 to 1e-10 (its sign changes) and a hundredfold by 1e-12 (the balance
+///   part of the check, [`gap_balances`]).
 #[test]
 fn comparisons_that_need_a_tighter_reference_pass() {
     let flag = |v: &Verdict, name: &str| match v {
@@ -1538,16 +1617,19 @@ fn comparisons_that_need_a_tighter_reference_pass() {
             case.what
         );
     }
+    // The balance part of invariant 5 (2315's two integrators find 84 and 83 contact
+    // episodes, so the sweep then skips its peaks).
     for seed in [2141, 2315, 2880] {
         let case = draw(seed);
-        let v = gap_verdict(&case);
         let branch = "adaptive balance 1e-12 / max(1e-8, 1e-10), retried";
-        assert!(
-            flag(&v, branch),
-            "seed {seed}: {:?}\n{}",
-            kind_of(&v),
-            case.what
-        );
+        match gap_balances(&case) {
+            Ok((values, _, _)) => assert!(
+                values.iter().any(|(n, _)| *n == branch),
+                "seed {seed}: not retried: {values:?}\n{}",
+                case.what
+            ),
+            Err(v) => panic!("seed {seed}: {:?}\n{}", kind_of(&v), case.what),
+        }
     }
 }
 

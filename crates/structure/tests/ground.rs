@@ -704,16 +704,44 @@ fn propagator_small_h_limits() {
 
 #[test]
 fn propagator_continuous_across_series_switch() {
-    // The propagator switches formulation near ωh = 0.5; both sides must agree.
-    for zeta in [0.0, 0.05, 0.9] {
-        let omega = 10.0;
+    // The propagator switches from the Taylor series to the closed form at ωh = 0.5: steps
+    // 4ε apart on either side must agree to round-off. Each entry is measured in its natural
+    // unit (a, b scaled by ω^p to the dimensionless propagator of ωh: a₀₁ω, a₁₀/ω, b₀ⱼω²,
+    // b₁ⱼω), where the closed form's terms are of order one and cancel to the entry (b₀₀ω² ≈
+    // (ωh)²/3 = 0.08): the two branches differ by at most 3.7 ε there (measured over these ω
+    // and ζ; 62 ε relative to b₀₀ itself at ω = 10, ζ = 0.9), the step's own change of 4ε·h
+    // included; 16 ε is asserted. (A 1e-9 change of h hid any jump below ~1e-8.)
+    for omega in [10.0, 3.7, 250.0] {
         let h0 = 0.5 / omega;
-        let lo = Propagator::new(omega, zeta, h0 * (1.0 - 1e-9));
-        let hi = Propagator::new(omega, zeta, h0 * (1.0 + 1e-9));
-        for i in 0..2 {
-            for j in 0..2 {
-                assert!(rel(lo.a[i][j], hi.a[i][j]) < 1e-8, "a[{i}][{j}]");
-                assert!(rel(lo.b[i][j], hi.b[i][j]) < 1e-8, "b[{i}][{j}]");
+        let (h_lo, h_hi) = (
+            h0 * (1.0 - 2.0 * f64::EPSILON),
+            h0 * (1.0 + 2.0 * f64::EPSILON),
+        );
+        assert!(omega * h_lo < 0.5 && omega * h_hi >= 0.5, "ω = {omega}");
+        let unit_a = [[1.0, omega], [1.0 / omega, 1.0]];
+        let unit_b = [[omega * omega, omega * omega], [omega, omega]];
+        for zeta in [0.0, 0.05, 0.9] {
+            let lo = Propagator::new(omega, zeta, h_lo);
+            let hi = Propagator::new(omega, zeta, h_hi);
+            for i in 0..2 {
+                for j in 0..2 {
+                    let da = (lo.a[i][j] - hi.a[i][j]).abs() * unit_a[i][j];
+                    let db = (lo.b[i][j] - hi.b[i][j]).abs() * unit_b[i][j];
+                    assert!(
+                        da <= 16.0 * f64::EPSILON,
+                        "ω {omega} ζ {zeta} a[{i}][{j}]: {} vs {} ({:.2} ε)",
+                        lo.a[i][j],
+                        hi.a[i][j],
+                        da / f64::EPSILON
+                    );
+                    assert!(
+                        db <= 16.0 * f64::EPSILON,
+                        "ω {omega} ζ {zeta} b[{i}][{j}]: {} vs {} ({:.2} ε)",
+                        lo.b[i][j],
+                        hi.b[i][j],
+                        db / f64::EPSILON
+                    );
+                }
             }
         }
     }

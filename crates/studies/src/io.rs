@@ -99,6 +99,75 @@ pub fn destination(path: &Path) -> Result<Destination, OutputError> {
     )))
 }
 
+/// Checks, before any work is done, that `path` can be written, so that a run is not
+/// thrown away at its end: [`destination`]'s checks (a folder is refused), then, for a file
+/// to replace, that it is not read-only, that no file stands where its folder should be, and
+/// that a file can be created in its folder (or, when the folder does not exist yet, in the
+/// nearest folder that does, where it will be made): an empty probe file is created there
+/// and removed at once. A device or pipe is not opened here (opening a FIFO would wake its
+/// reader); it is opened when written.
+pub fn check_writable(path: &Path) -> Result<Destination, OutputError> {
+    let dest = destination(path)?;
+    let Destination::Replace(real) = &dest else {
+        return Ok(dest);
+    };
+    let err = |error| OutputError::Io {
+        path: path.display().to_string(),
+        error,
+    };
+    if std::fs::metadata(real).is_ok_and(|m| m.permissions().readonly()) {
+        return Err(err(std::io::Error::new(
+            std::io::ErrorKind::PermissionDenied,
+            "the file exists and is read-only; it is not replaced",
+        )));
+    }
+    let dir = match real.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    if let Some(file) = file_in_the_way(dir) {
+        return Err(OutputError::NotAFolder {
+            path: path.display().to_string(),
+            file: file.display().to_string(),
+        });
+    }
+    let Some(existing) = dir.ancestors().find(|a| a.exists()) else {
+        return Ok(dest);
+    };
+    let name = real
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let probe = existing.join(format!(".{name}.probe-{}", std::process::id()));
+    std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&probe)
+        .map_err(err)?;
+    let _ = std::fs::remove_file(&probe);
+    Ok(dest)
+}
+
+/// Whether `a` and `b` name one existing regular file (the same device and inode, so links,
+/// `..` and hard links are seen through): an output that would overwrite an input.
+#[cfg(unix)]
+pub fn same_file(a: &Path, b: &Path) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    match (std::fs::metadata(a), std::fs::metadata(b)) {
+        (Ok(x), Ok(y)) => x.is_file() && (x.dev(), x.ino()) == (y.dev(), y.ino()),
+        _ => false,
+    }
+}
+
+/// Elsewhere: the same canonical path.
+#[cfg(not(unix))]
+pub fn same_file(a: &Path, b: &Path) -> bool {
+    match (std::fs::canonicalize(a), std::fs::canonicalize(b)) {
+        (Ok(x), Ok(y)) => x == y && std::fs::metadata(&x).is_ok_and(|m| m.is_file()),
+        _ => false,
+    }
+}
+
 /// Whether `path` names the file standard output writes to: the same device and inode as
 /// stdout's (`/dev/stdout`, `/proc/self/fd/1`, or the file or pipe stdout is redirected to).
 /// False when either cannot be asked (a path that does not exist yet is not stdout).

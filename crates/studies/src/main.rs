@@ -16,6 +16,7 @@ use anyhow::{Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
 use solvers::{History, Method};
+use structure::ground::record::MIN_RECORD_DT;
 use structure::ground::spectrum::{default_periods, response_spectrum};
 use structure::ground::{FormatKind, FormatRefusal};
 use structure::{GroundMotion, RecordError, RecordFormat, Scene, Units};
@@ -354,6 +355,32 @@ fn input<E: std::fmt::Display>(e: E) -> anyhow::Error {
     anyhow::Error::new(InputError(e.to_string()))
 }
 
+/// The files a scene was read from: the scene file and its record (none for free vibration).
+fn scene_inputs(path: &std::path::Path, scene: &Scene) -> Vec<(&'static str, PathBuf)> {
+    let mut inputs = vec![("scene file", path.to_path_buf())];
+    if let Some(src) = &scene.ground_source {
+        inputs.push(("scene's record", src.file.clone()));
+    }
+    inputs
+}
+
+/// Refuses (exit 2, before any work) an output path that is one of the run's input files:
+/// writing it would replace the scene or the record with the output.
+fn refuse_input_as_output(
+    flag: &str,
+    out: &std::path::Path,
+    inputs: &[(&str, PathBuf)],
+) -> Result<()> {
+    match inputs.iter().find(|(_, p)| io::same_file(out, p)) {
+        Some((what, p)) => Err(input(format!(
+            "{flag} {}: is the {what} ({}); writing it would replace that input: give another path",
+            out.display(),
+            p.display()
+        ))),
+        None => Ok(()),
+    }
+}
+
 /// The scene overrides that read `studies run --records` files as `--record-format` and
 /// `--record-dt` say (after [`check_user_records`] has accepted them): first the study
 /// scene's own `ground_motion.format`, `dt` and `units` removed (they describe its own
@@ -467,7 +494,10 @@ fn check_user_records(
 /// options `--record-format` (`format`) and `--record-dt`.
 fn records_refusal(refusal: FormatRefusal, format: Option<FormatArg>, file: &Path) -> String {
     match refusal {
-        FormatRefusal::BadDt { dt } => format!("--record-dt {dt}: expected a time step > 0 (s)"),
+        FormatRefusal::BadDt { dt } => format!(
+            "--record-dt {}: expected a time step > 0 (s), finite and at least {MIN_RECORD_DT:e} s",
+            short(dt)
+        ),
         FormatRefusal::DtWithAt2 { dt, by_name: true } => format!(
             "--record-dt {dt}: {} is read as a PEER AT2 record, which states its time step on \
             line 4; remove --record-dt (or give --record-format one-column)",
@@ -533,7 +563,7 @@ fn load_record(a: &RecordArgs) -> Result<GroundMotion> {
             "--dt: a two-column record takes its time step from its time column; remove --dt",
         ),
         FormatRefusal::OneColumnWithoutDt => input("a one-column record needs --dt (s)"),
-        FormatRefusal::BadDt { dt } => input(format!("--dt {dt}: expected a time step > 0 (s)")),
+        FormatRefusal::BadDt { dt } => input(format!("--dt {}: expected a time step > 0 (s), finite and at least {MIN_RECORD_DT:e} s", short(dt))),
     })?;
     // One read of the file: the header's units are looked at in the bytes then parsed.
     let bytes = structure::ground::record::read_bytes(&a.record).map_err(input)?;
@@ -620,6 +650,10 @@ fn run(cli: Cli) -> Result<()> {
                     "--damping {damping}: expected 0 <= ratio < 1"
                 )));
             }
+            if let Some(p) = &out {
+                refuse_input_as_output("--out", p, &[("record", record.record.clone())])?;
+                io::check_writable(p).map_err(anyhow::Error::new)?;
+            }
             let mut gm = load_record(&record)?;
             if pga.is_none() {
                 implausible_pga(&gm, UNITS_FLAG);
@@ -644,7 +678,7 @@ fn run(cli: Cli) -> Result<()> {
                 .find(|t| !(t.is_finite() && (**t == 0.0 || **t >= MIN_PERIOD)))
             {
                 return Err(input(format!(
-                    "--periods: {} is not a period of 0 (the rigid limit, PSA = PGA) or >= {MIN_PERIOD:e} s (below {MIN_PERIOD:e} s the oscillator is rigid: give 0)",
+                    "--periods: {} is not a period of 0 (the rigid limit, PSA = PGA) or a finite period >= {MIN_PERIOD:e} s (below {MIN_PERIOD:e} s the oscillator is rigid: give 0)",
                     short(*t)
                 )));
             }
@@ -692,7 +726,7 @@ fn run(cli: Cli) -> Result<()> {
             if let Some(dt) = history_dt {
                 if !(dt.is_finite() && dt > 0.0) {
                     return Err(input(format!(
-                        "--history-dt {dt}: expected a positive number of seconds"
+                        "--history-dt {dt}: expected a finite number of seconds > 0"
                     )));
                 }
             }
@@ -758,14 +792,20 @@ fn run(cli: Cli) -> Result<()> {
             // other file or device (`--out run.json`, `/dev/null`) it is printed too. Decided,
             // and a folder or unwritable place (for `--history` too) refused, before the
             // analysis runs.
+            let inputs = scene_inputs(&path, &scene);
+            for (flag, p) in [("--out", &out), ("--history", &history)] {
+                if let Some(p) = p.as_deref().filter(|p| p.as_os_str() != "-") {
+                    refuse_input_as_output(flag, p, &inputs)?;
+                }
+            }
             if let Some(h) = &history {
-                io::destination(h).map_err(anyhow::Error::new)?;
+                io::check_writable(h).map_err(anyhow::Error::new)?;
             }
             let summary = match &out {
                 None => true,
                 Some(p) if p.as_os_str() == "-" => false,
                 Some(p) => {
-                    io::destination(p).map_err(anyhow::Error::new)?;
+                    io::check_writable(p).map_err(anyhow::Error::new)?;
                     !io::is_stdout(p)
                 }
             };
@@ -838,6 +878,10 @@ fn run(cli: Cli) -> Result<()> {
                 },
         } => {
             let scene = load_scene(&path, &set)?;
+            if let Some(p) = &out {
+                refuse_input_as_output("--out", p, &scene_inputs(&path, &scene))?;
+                io::check_writable(p).map_err(anyhow::Error::new)?;
+            }
             let script = studies::export::opensees_script(&scene)
                 .map_err(|e| input(format!("{}: {e}", path.display())))?;
             for w in studies::export::opensees_caveats(&scene) {

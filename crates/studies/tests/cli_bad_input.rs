@@ -243,6 +243,24 @@ fn record_zero_and_negative_dt() {
     record_case("dt0.AT2", &zero, &[], "", &["line 4", "DT > 0", "found 0"]);
     let neg = at2("NPTS=    5, DT=  -0.0100 SEC", VALUES5);
     record_case("dtneg.AT2", &neg, &[], "", &["line 4", "DT > 0", "-0.01"]);
+    // Below a microsecond (a unit or typing error; near 1e-300 s the solvers could not
+    // compute with it and stopped at t = 0 naming no key), and infinite: "finite" is said.
+    let tiny = at2("NPTS=    5, DT=  1e-8 SEC", VALUES5);
+    record_case(
+        "dttiny.AT2",
+        &tiny,
+        &[],
+        "",
+        &["line 4", "at least 1e-6 s", "found 1e-8"],
+    );
+    let inf = at2("NPTS=    5, DT=  1e400 SEC", VALUES5);
+    record_case(
+        "dtinf.AT2",
+        &inf,
+        &[],
+        "",
+        &["line 4", "finite", "found inf"],
+    );
     // Two-column: a repeated or decreasing time.
     record_case(
         "t0.txt",
@@ -272,6 +290,7 @@ fn record_one_column_dt_on_the_command_line() {
         ("--dt=0", &["--dt", "0", "> 0"][..]),
         ("--dt=-0.01", &["--dt", "-0.01", "> 0"][..]),
         ("--dt=nan", &["--dt", "NaN", "> 0"][..]),
+        ("--dt=1e-320", &["--dt 1e-320", "at least 1e-6 s"][..]),
     ] {
         let base = ["--format".to_string(), "one-column".into(), dt.into()];
         let mut args = vec!["record".to_string(), s(&rec)];
@@ -306,6 +325,10 @@ fn record_one_column_dt_in_a_scene() {
         ("dt = 0.0", &["ground_motion.dt", "> 0"][..]),
         ("dt = -0.01", &["ground_motion.dt", "-0.01", "> 0"][..]),
         ("dt = nan", &["ground_motion.dt", "> 0"][..]),
+        (
+            "dt = 1e-300",
+            &["ground_motion.dt", "1e-300", "at least 1e-6 s"][..],
+        ),
         ("", &["ground_motion.dt", "missing"][..]),
     ] {
         let scene = d.write(
@@ -720,6 +743,136 @@ fn scene_array_lengths_that_disagree() {
         &base,
         &["buildings.0.masses=[]"],
         &["buildings[0].masses", "empty"],
+    );
+}
+
+#[test]
+fn scene_with_more_floors_than_a_building_may_have() {
+    // An explicit list is capped as `stories = N` is (10 000 floors took minutes in the
+    // eigen-solver with no message).
+    let masses = vec!["1.0e5"; 1001].join(", ");
+    let text = format!(
+        "name = \"tall\"\n[[buildings]]\nname = \"a\"\nmasses = [{masses}]\nstory_stiffness = 1.0e8\n"
+    );
+    scene_case(
+        &text,
+        &[],
+        &["buildings[0].masses", "1001 masses", "at most 1000 floors"],
+    );
+}
+
+/// An output that is one of the run's inputs is refused (exit 2) before anything runs, the
+/// input left as it was, through a hard or symbolic link too; an output that cannot be
+/// written is refused (exit 1) before the analysis runs, not after it: with the adaptive
+/// integrator and a budget of 50 steps (enough to start, not to finish) the analysis itself
+/// fails (exit 3).
+#[test]
+fn outputs_that_are_inputs_or_cannot_be_written_are_refused_before_the_run() {
+    let d = TempDir::new("out-in");
+    let rec = d.write("rec.txt", RECORD);
+    let text = base_scene();
+    let scene = d.write("scene.toml", &text);
+    let alias = d.path("alias.toml");
+    std::fs::hard_link(&scene, &alias).unwrap();
+    let link = d.path("link.txt");
+    #[cfg(unix)]
+    std::os::unix::fs::symlink(&rec, &link).unwrap();
+    #[cfg(not(unix))]
+    std::fs::hard_link(&rec, &link).unwrap();
+    let run = |flag: &str, out: &Path| {
+        vec![
+            "run".to_string(),
+            s(&scene),
+            "--method".into(),
+            "gap".into(),
+            flag.into(),
+            s(out),
+        ]
+    };
+    for (args, expect) in [
+        (run("--out", &scene), &["--out", "is the scene file"][..]),
+        (run("--out", &alias), &["--out", "is the scene file"][..]),
+        (
+            run("--history", &rec),
+            &["--history", "is the scene's record"][..],
+        ),
+        (run("--out", &link), &["--out", "is the scene's record"][..]),
+        (
+            vec![
+                "export".to_string(),
+                "opensees".into(),
+                s(&scene),
+                "--out".into(),
+                s(&scene),
+            ],
+            &["--out", "is the scene file"][..],
+        ),
+        (
+            vec!["spectrum".to_string(), s(&rec), "--out".into(), s(&rec)],
+            &["--out", "is the record"][..],
+        ),
+    ] {
+        assert_bad(&args, expect, &[]);
+        assert_eq!(std::fs::read_to_string(&scene).unwrap(), text);
+        assert_eq!(std::fs::read_to_string(&rec).unwrap(), RECORD);
+    }
+
+    // Cannot be written: below a file, or an existing read-only file (refused as such even
+    // for root, who may write anything).
+    let file = d.write("afile", "");
+    let ro = d.write("ro.json", "kept");
+    let mut perm = std::fs::metadata(&ro).unwrap().permissions();
+    perm.set_readonly(true);
+    std::fs::set_permissions(&ro, perm).unwrap();
+    let budget = [
+        "--set".to_string(),
+        "gap_element.integrator=\"adaptive\"".into(),
+        "--set".into(),
+        "analysis.max_steps=50".into(),
+    ];
+    let mut fails = run("--out", &d.path("r.json"));
+    fails.extend(budget.iter().cloned());
+    let o = pound(&fails);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(3), "the analysis alone fails: {err}");
+    // A solver that cannot go on says when, why and in what state.
+    assert!(
+        err.contains("step budget exhausted at t = ")
+            && err.contains("next step ")
+            && err.contains("closed contacts: []"),
+        "{err}"
+    );
+    for (flag, out, expect) in [
+        (
+            "--out",
+            file.join("r.json"),
+            "afile is a file, not a folder",
+        ),
+        (
+            "--history",
+            file.join("h.csv"),
+            "afile is a file, not a folder",
+        ),
+        ("--out", ro.clone(), "read-only; it is not replaced"),
+    ] {
+        let mut args = run(flag, &out);
+        args.extend(budget.iter().cloned());
+        let o = pound(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
+        assert!(err.contains(expect), "{err}");
+        assert!(!err.contains("step budget"), "checked after the run: {err}");
+    }
+    assert_eq!(std::fs::read_to_string(&ro).unwrap(), "kept");
+    let names: Vec<_> = std::fs::read_dir(&d.0)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert!(
+        !names
+            .iter()
+            .any(|n| n.contains(".probe-") || n.contains(".tmp-")),
+        "{names:?}"
     );
 }
 
@@ -1227,7 +1380,7 @@ fn history_dt_must_be_positive_and_needs_a_history() {
         }
         assert_bad(
             &a,
-            &["--history-dt", "expected a positive number of seconds"],
+            &["--history-dt", "expected a finite number of seconds > 0"],
             &[&json, &hist],
         );
     }

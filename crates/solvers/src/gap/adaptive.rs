@@ -783,10 +783,12 @@ impl<'a> GapStepper<'a> {
         }
         self.total_steps += 1;
         if self.total_steps > self.max_steps {
+            let closed: Vec<usize> = (0..nc).filter(|&i| ledger.closed(i)).collect();
             return Err(SolverError::StepBudget {
                 time: t,
                 steps: self.total_steps - 1,
                 limit: self.max_steps,
+                context: format!("next step {hs:.3e} s, closed contacts: {closed:?}"),
             });
         }
         self.progress.check(t, self.total_steps)?;

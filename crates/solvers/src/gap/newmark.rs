@@ -197,6 +197,9 @@ impl<'a> NewmarkStepper<'a> {
                 time: 0.0,
                 steps: 0,
                 limit: scene.limits.max_steps,
+                context: format!(
+                    "before the first step: {nsteps} fixed steps of {dt:.3e} s are needed"
+                ),
             });
         }
         let a0 = 4.0 / (dt * dt);

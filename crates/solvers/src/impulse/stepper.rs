@@ -331,6 +331,7 @@ impl<'a> ImpulseStepper<'a> {
                 time: t,
                 steps: self.total_steps - 1,
                 limit: self.cfg.max_steps,
+                context: format!("next step {hs:.3e} s, held contacts: {:?}", self.s.held.set),
             });
         }
         self.progress.check(t, self.total_steps)?;

@@ -685,10 +685,15 @@ impl<'a> Stepper<'a> {
     #[inline(never)]
     fn count_step_checks(&mut self) -> Result<(), SolverError> {
         if self.stats.steps > self.p.limits.max_steps {
+            let held: Vec<usize> = self.s.persistent.iter().map(|&(c, _)| c).collect();
             return Err(SolverError::StepBudget {
                 time: self.s.t,
                 steps: self.stats.steps,
                 limit: self.p.limits.max_steps,
+                context: format!(
+                    "{} impacts so far, contacts in persistent contact: {held:?}",
+                    self.stats.impacts
+                ),
             });
         }
         self.progress.check(self.s.t, self.stats.steps)?;

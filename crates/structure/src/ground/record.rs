@@ -170,8 +170,30 @@ pub enum FormatRefusal {
     #[error("a one-column record needs its time step")]
     OneColumnWithoutDt,
     /// A time step of a one-column record that is not finite and > 0.
-    #[error("expected a time step > 0 (s), found {dt}")]
+    #[error("expected a time step > 0 (s), finite and at least {MIN_RECORD_DT:e} s, found {}", short_number(*.dt))]
     BadDt { dt: f64 },
+}
+
+/// The shortest time step a record may have, s. Accelerographs sample at 50 … 1 000 Hz
+/// (0.02 … 0.001 s) and a refined record at a small fraction of that; a step far below a
+/// microsecond is a unit or typing error, and one near the bottom of the floating-point range
+/// (1e-300 s) cannot be computed with (the propagators' ωh underflows and the solvers stop
+/// at t = 0 with a non-finite state instead of naming the record's step).
+pub const MIN_RECORD_DT: f64 = 1e-6;
+
+/// A number for a message: as written for everyday magnitudes, in exponent form otherwise
+/// (`1e-320`, not hundreds of digits).
+pub fn short_number(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() || (1e-3..1e6).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
+/// Whether `dt` is a record time step pound accepts: finite and at least [`MIN_RECORD_DT`].
+pub fn valid_dt(dt: f64) -> bool {
+    dt.is_finite() && dt >= MIN_RECORD_DT
 }
 
 /// Whether `path` is named like a PEER AT2 record: its extension is `at2` in any case.
@@ -213,7 +235,7 @@ impl RecordFormat {
             (FormatKind::TwoColumn, Some(dt)) => return Err(FormatRefusal::DtWithTwoColumn { dt }),
             (FormatKind::TwoColumn, None) => RecordFormat::TwoColumn { units },
             (FormatKind::OneColumn, None) => return Err(FormatRefusal::OneColumnWithoutDt),
-            (FormatKind::OneColumn, Some(dt)) if !(dt.is_finite() && dt > 0.0) => {
+            (FormatKind::OneColumn, Some(dt)) if !valid_dt(dt) => {
                 return Err(FormatRefusal::BadDt { dt })
             }
             (FormatKind::OneColumn, Some(dt)) => RecordFormat::OneColumn { dt, units },
@@ -338,7 +360,7 @@ pub enum RecordError {
         units: Units,
     },
     /// `line` is `None` when the time step was given by the caller, not read from the file.
-    #[error("{origin}{}: expected a time step DT > 0 (s), found {dt}", line_suffix(*.line))]
+    #[error("{origin}{}: expected a time step DT > 0 (s), finite and at least {MIN_RECORD_DT:e} s, found {}", line_suffix(*.line), short_number(*.dt))]
     BadDt {
         origin: String,
         line: Option<usize>,
@@ -821,7 +843,7 @@ impl GroundMotion {
     /// and finite values.
     pub fn new(name: impl Into<String>, dt: f64, accel: Vec<f64>) -> Result<Self, RecordError> {
         let name = name.into();
-        if !(dt.is_finite() && dt > 0.0) {
+        if !valid_dt(dt) {
             return Err(RecordError::BadDt {
                 origin: name,
                 line: None,
@@ -973,7 +995,7 @@ impl GroundMotion {
                 found: clip(l4.trim()),
             });
         };
-        if !(dt.is_finite() && dt > 0.0) {
+        if !valid_dt(dt) {
             return Err(RecordError::BadDt {
                 origin: origin.to_string(),
                 line: Some(4),
@@ -1088,7 +1110,7 @@ impl GroundMotion {
         let (t0, _) = times[0];
         let (tn, _) = times[times.len() - 1];
         let dt = (tn - t0) / (times.len() - 1) as f64;
-        if !(dt.is_finite() && dt > 0.0) {
+        if !valid_dt(dt) {
             // Rising finite times with a span that overflows (e.g. -1e308 … 1e308).
             let (t1, l1) = times[1];
             return Err(RecordError::BadDt {
@@ -1143,7 +1165,7 @@ impl GroundMotion {
         units: Units,
     ) -> Result<Self, RecordError> {
         let text = strip_bom(text);
-        if !(dt.is_finite() && dt > 0.0) {
+        if !valid_dt(dt) {
             return Err(RecordError::BadDt {
                 origin: origin.to_string(),
                 line: None,
