@@ -1,6 +1,6 @@
 //! The impulse method (`--method impulse`, issue 13): the paper's impact law on the physical
 //! floor coordinates, integrated by the adaptive Dormand–Prince stepper. On linear buildings
-//! it must reproduce the momentum method with all modes (same impacts, peaks to 1e-6), the
+//! it must reproduce the momentum method with all modes (same impacts, peaks to ten times the tolerance), the
 //! closed forms (a floor against a wall, the stereomechanical two-mass impact), an energy
 //! balance closing to the integration tolerance, and without contact the gap element
 //! (the same integrator on the same equations).
@@ -99,7 +99,8 @@ fn paper_scenes_match_the_momentum_method_with_all_modes() {
             imp.stats.wall_seconds,
             mom.stats.wall_seconds
         );
-        assert!(d <= 1e-6, "{name}: peaks differ by {d:e}");
+        // Ten times the tolerance (measured 1.4e-8 roof, 2.1e-8 aligned).
+        assert!(d <= 1e-7, "{name}: peaks differ by {d:e}");
         same_impacts(&mom, &imp, 1e-7, 1e-6);
         assert_eq!(imp.method, "impulse");
         assert!(imp.settings.contains("tol=1e-8"), "{}", imp.settings);
