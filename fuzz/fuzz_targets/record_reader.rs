@@ -8,12 +8,15 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
+use structure::ground::record::MIN_RECORD_DT;
 use structure::ground::{GroundMotion, Units};
 
 fn exercise(g: &GroundMotion) {
-    assert!(g.dt.is_finite() && g.dt > 0.0, "dt {}", g.dt);
+    // Finite and at least MIN_RECORD_DT (1e-6 s): a tinier step is refused, not run.
+    assert!(g.dt.is_finite() && g.dt >= MIN_RECORD_DT, "dt {}", g.dt);
     assert!(g.npts() >= 2);
     assert!(g.accel.iter().all(|a| a.is_finite()));
+    assert!(g.integrals_finite(), "velocity or displacement not finite");
     let _ = g.pga();
     let _ = g.pgv();
     let _ = g.pgd();
@@ -37,8 +40,8 @@ fuzz_target!(|data: &[u8]| {
     let dt = match selector / 3 % 4 {
         0 => 0.005,
         1 => 0.02,
-        2 => 1.0e-9,
-        _ => 0.0, // invalid: must be refused
+        2 => 1.0e-9, // invalid: below MIN_RECORD_DT, must be refused
+        _ => 0.0,    // invalid: must be refused
     };
     if let Ok(g) = GroundMotion::from_at2_str(text, "fuzz.at2") {
         exercise(&g);
@@ -48,7 +51,7 @@ fuzz_target!(|data: &[u8]| {
     }
     match GroundMotion::from_one_column_str(text, "fuzz.dat", dt, units) {
         Ok(g) => {
-            assert!(dt > 0.0, "dt = {dt} must be refused");
+            assert!(dt >= MIN_RECORD_DT, "dt = {dt} must be refused");
             exercise(&g);
         }
         Err(e) => {

@@ -10,6 +10,7 @@
 use std::path::Path;
 
 use libfuzzer_sys::fuzz_target;
+use structure::scene::MAX_STORIES;
 use structure::Scene;
 
 fuzz_target!(|data: &[u8]| {
@@ -25,9 +26,11 @@ fuzz_target!(|data: &[u8]| {
             assert!(scene.duration.is_finite() && scene.duration > 0.0);
             for b in &scene.buildings {
                 assert!(b.validate().is_ok(), "a loaded building is valid");
+                assert!((1..=MAX_STORIES).contains(&b.n_floors()));
             }
             for c in &scene.contacts {
-                assert!(c.left != c.right);
+                // A wall contact repeats its left side on the right (`Contact::wall`).
+                assert!(c.left != c.right || (c.wall && c.left_dof == c.right_dof));
                 assert!(c.left_dof < scene.buildings[c.left].n_floors());
                 assert!(c.right_dof < scene.buildings[c.right].n_floors());
                 assert!(c.gap >= 0.0 && (0.0..=1.0).contains(&c.restitution));

@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 
 use proptest::prelude::*;
 use structure::ground::nigam_jennings::{acceleration, Propagator};
+use structure::ground::record::MIN_RECORD_DT;
 use structure::ground::spectrum::{default_periods, response_spectrum};
 use structure::ground::{
     FormatKind, FormatRefusal, GroundMotion, RecordChoice, RecordError, RecordFormat,
@@ -875,14 +876,37 @@ fn default_periods_shape() {
 // Robustness
 // ---------------------------------------------------------------------------------------
 
+/// What every read must give, whatever the text (the fuzz target `fuzz/fuzz_targets/
+/// record_reader.rs` asserts the same): a record the solvers accept (at least two finite
+/// samples, a time step finite and at least `MIN_RECORD_DT`, peaks and interpolation
+/// defined), or an error that names the file.
+fn read_valid_or_named<E: std::fmt::Display>(
+    r: Result<GroundMotion, E>,
+    file: &str,
+) -> Result<(), TestCaseError> {
+    match r {
+        Ok(gm) => {
+            prop_assert!(gm.npts() >= 2 && gm.accel.iter().all(|a| a.is_finite()));
+            prop_assert!(gm.dt.is_finite() && gm.dt >= MIN_RECORD_DT, "dt {}", gm.dt);
+            prop_assert!(gm.pga().is_finite() && gm.pgv().is_finite() && gm.pgd().is_finite());
+            prop_assert!(gm.accel_at(0.5 * gm.duration()).is_finite());
+        }
+        Err(e) => {
+            let m = e.to_string();
+            prop_assert!(m.contains(file), "{m}");
+        }
+    }
+    Ok(())
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 512, ..ProptestConfig::default() })]
 
     #[test]
     fn parsers_never_panic_on_arbitrary_text(s in any::<String>()) {
-        let _ = GroundMotion::from_at2_str(&s, "p.AT2");
-        let _ = GroundMotion::from_two_column_str(&s, "p.txt", Units::G);
-        let _ = GroundMotion::from_one_column_str(&s, "p.txt", 0.01, Units::G);
+        read_valid_or_named(GroundMotion::from_at2_str(&s, "p.AT2"), "p.AT2")?;
+        read_valid_or_named(GroundMotion::from_two_column_str(&s, "p.txt", Units::G), "p.txt")?;
+        read_valid_or_named(GroundMotion::from_one_column_str(&s, "p.txt", 0.01, Units::G), "p.txt")?;
     }
 
     #[test]
@@ -895,13 +919,12 @@ proptest! {
         body in "[0-9eE.+\\- \\t\\r\\n,#xa-z]{0,200}",
     ) {
         let text = format!("{HEAD}{line4}\n{body}");
-        let _ = GroundMotion::from_at2_str(&text, "p.AT2");
-        let _ = GroundMotion::from_two_column_str(&body, "p.txt", Units::G);
-        let _ = GroundMotion::from_one_column_str(&body, "p.txt", 0.01, Units::CentimetersPerSecond2);
-        if let Ok(gm) = GroundMotion::from_at2_str(&text, "p.AT2") {
-            prop_assert!(gm.npts() >= 2 && gm.dt > 0.0 && gm.accel.iter().all(|a| a.is_finite()));
-            let _ = (gm.pgv(), gm.pgd(), gm.accel_at(0.013));
-        }
+        read_valid_or_named(GroundMotion::from_at2_str(&text, "p.AT2"), "p.AT2")?;
+        read_valid_or_named(GroundMotion::from_two_column_str(&body, "p.txt", Units::G), "p.txt")?;
+        read_valid_or_named(
+            GroundMotion::from_one_column_str(&body, "p.txt", 0.01, Units::CentimetersPerSecond2),
+            "p.txt",
+        )?;
     }
 
     /// Valid AT2 records (the text above almost never is one): any finite values, written
@@ -1410,7 +1433,8 @@ fn checked_scaled_names_the_first_sample_that_overflows() {
         ScaleOverflow {
             factor: 1e308,
             sample: 2,
-            value: -2.0
+            value: -2.0,
+            integrals: false,
         }
     );
     let m = e.to_string();
@@ -1418,4 +1442,50 @@ fn checked_scaled_names_the_first_sample_that_overflows() {
         m.contains("sample 2") && m.contains("beyond the range"),
         "{m}"
     );
+}
+
+/// Accelerations finite but near the top of the floating-point range take the ground
+/// velocity or displacement (or the jerk between samples) beyond it: such a record is
+/// refused on reading, naming the file, and a scale factor that does this is refused naming
+/// the largest sample, where `pound record` used to print a PGV of `inf`.
+#[test]
+fn records_whose_integrals_overflow_are_refused() {
+    // 1e307 g: finite in m/s² (9.8e307), but the jerk (a1 − a0)/dt and the displacement are not.
+    let text = "0 1e307\n0.01 1.5e307\n0.02 1.7e307\n0.03 1.7e307\n";
+    let e = GroundMotion::from_two_column_str(text, "big.txt", Units::G).unwrap_err();
+    assert!(matches!(e, RecordError::Unbounded { .. }), "{e:?}");
+    let m = e.to_string();
+    assert!(
+        m.starts_with("big.txt: accelerations up to 1.667e308 m/s^2")
+            && m.contains("ground velocity or displacement beyond the range of floating point"),
+        "{m}"
+    );
+    assert!(matches!(
+        GroundMotion::new("big", 0.01, vec![1e307, 1.7e308, 1.7e308]),
+        Err(RecordError::Unbounded { .. })
+    ));
+    // The same record a little smaller reads, and its integrals are finite.
+    let g =
+        GroundMotion::from_two_column_str("0 1e3\n0.01 1.5e3\n0.02 -1.7e3\n", "ok.txt", Units::G)
+            .unwrap();
+    assert!(g.integrals_finite() && g.pgd().is_finite());
+    // Scaling: every sample stays finite (1.5e308 m/s² at most), the velocity does not
+    // (samples 2 and 3 sum to 2.85e308).
+    let g = GroundMotion::new("x", 0.01, vec![0.0, 1.0, 0.9, 0.5]).unwrap();
+    let e = g.checked_scaled(1.5e308).unwrap_err();
+    assert_eq!(
+        e,
+        ScaleOverflow {
+            factor: 1.5e308,
+            sample: 2,
+            value: 1.0,
+            integrals: true,
+        }
+    );
+    let m = e.to_string();
+    assert!(
+        m.contains("its largest sample 2") && m.contains("ground velocity or displacement"),
+        "{m}"
+    );
+    assert!(g.checked_scaled(1e300).is_ok());
 }

@@ -1,6 +1,7 @@
 //! Integration tests for `structure::scene`: the paper scene, `--set` overrides, shorthand
 //! forms, documented defaults, errors that name the key, and a property test that no input
-//! (arbitrary text, mutations of the paper scene, arbitrary overrides) makes the loader panic.
+//! (arbitrary text, mutations of the paper scene, arbitrary overrides) makes the loader panic,
+//! load an invalid scene or give an error that names neither the file nor the `--set`.
 //!
 //! The command-line side of the bad-input catalogue (exit code 2, no partial output) lives in
 //! `crates/studies/tests/cli_bad_input.rs`.
@@ -848,19 +849,51 @@ fn the_scene_scales_its_record_as_the_record_does() {
     assert_eq!(s.ground.unwrap(), rec.scaled(0.37));
 }
 
+/// What every load must give, whatever the input (the fuzz target `fuzz/fuzz_targets/
+/// scene_loader.rs` asserts the same): a scene that loads is valid (buildings that validate,
+/// 1 ..= MAX_STORIES floors, a finite positive duration, contacts between two buildings, or
+/// a building and a wall, at existing floors, gap >= 0 and c_r in [0, 1]); an error names
+/// the file (`fuzz.toml`) or the `--set` expression it comes from.
+fn loads_valid_or_names_its_source(r: Result<Scene, SceneError>) -> Result<(), TestCaseError> {
+    match r {
+        Ok(scene) => {
+            prop_assert!(!scene.buildings.is_empty());
+            prop_assert!(scene.duration.is_finite() && scene.duration > 0.0);
+            for b in &scene.buildings {
+                prop_assert!(b.validate().is_ok(), "{b:?}");
+                prop_assert!((1..=MAX_STORIES).contains(&b.n_floors()));
+            }
+            for c in &scene.contacts {
+                prop_assert!(c.left != c.right || (c.wall && c.left_dof == c.right_dof));
+                prop_assert!(c.left_dof < scene.buildings[c.left].n_floors());
+                prop_assert!(c.right_dof < scene.buildings[c.right].n_floors());
+                prop_assert!(
+                    c.gap >= 0.0 && (0.0..=1.0).contains(&c.restitution),
+                    "{c:?}"
+                );
+            }
+        }
+        Err(e) => {
+            let m = e.to_string();
+            prop_assert!(m.contains("fuzz.toml") || m.starts_with("--set "), "{m}");
+        }
+    }
+    Ok(())
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
 
     #[test]
     fn arbitrary_text_never_panics(text in "\\PC{0,400}") {
-        let _ = Scene::from_str_with_overrides(&text, "fuzz.toml", Path::new("."), &[]);
+        loads_valid_or_names_its_source(Scene::from_str_with_overrides(&text, "fuzz.toml", Path::new("."), &[]))?;
     }
 
     #[test]
     fn toml_shaped_text_never_panics(
         text in "(\\[\\[?(buildings|contacts|ground_motion|analysis|momentum|gap_element)\\]\\]?\n|[a-z_]{1,22} = (-?[0-9.e]{1,8}|\"[a-z0-9]{0,9}\"|\\[[-0-9., e]{0,20}\\]|true|nan|inf)\n){0,30}"
     ) {
-        let _ = Scene::from_str_with_overrides(&text, "fuzz.toml", &fixtures_dir(), &[]);
+        loads_valid_or_names_its_source(Scene::from_str_with_overrides(&text, "fuzz.toml", &fixtures_dir(), &[]))?;
     }
 
     #[test]
@@ -869,7 +902,7 @@ proptest! {
         for m in &ms {
             text = apply(&text, m);
         }
-        let _ = Scene::from_str_with_overrides(&text, "fuzz.toml", &fixtures_dir(), &[]);
+        loads_valid_or_names_its_source(Scene::from_str_with_overrides(&text, "fuzz.toml", &fixtures_dir(), &[]))?;
     }
 
     #[test]
@@ -883,7 +916,7 @@ proptest! {
             1..4,
         )
     ) {
-        let _ = Scene::from_str_with_overrides(&tiny_with_record(), "fuzz.toml", &fixtures_dir(), &sets);
+        loads_valid_or_names_its_source(Scene::from_str_with_overrides(&tiny_with_record(), "fuzz.toml", &fixtures_dir(), &sets))?;
     }
 }
 
@@ -898,7 +931,7 @@ proptest! {
         for m in &ms {
             text = apply(&text, m);
         }
-        let _ = Scene::from_str_with_overrides(&text, "fuzz.toml", &paper_dir(), &[]);
+        loads_valid_or_names_its_source(Scene::from_str_with_overrides(&text, "fuzz.toml", &paper_dir(), &[]))?;
     }
 
     #[test]
@@ -910,7 +943,7 @@ proptest! {
         )
     ) {
         let o: Vec<String> = sets;
-        let _ = Scene::from_str_with_overrides(&paper_text(), "fuzz.toml", &paper_dir(), &o);
+        loads_valid_or_names_its_source(Scene::from_str_with_overrides(&paper_text(), "fuzz.toml", &paper_dir(), &o))?;
     }
 }
 

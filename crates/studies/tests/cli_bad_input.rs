@@ -237,6 +237,37 @@ fn record_nan_and_infinite_values() {
     }
 }
 
+/// Values finite in m/s² whose velocity or displacement is not (1e307 g): refused naming the
+/// file, where `pound record` printed a PGV and PGD of `inf` and exited 0.
+#[test]
+fn record_whose_integrals_overflow() {
+    record_case(
+        "huge.txt",
+        "0.00 1e307\n0.01 1.5e307\n0.02 1.7e307\n0.03 0.0\n",
+        &[],
+        "",
+        &["accelerations up to", "ground velocity or displacement"],
+    );
+    // A scale that leaves every sample finite but not the velocity: refused naming the key.
+    let d = TempDir::new("huge-scale");
+    d.write("small.txt", "0.00 0.0\n0.01 1.0\n0.02 0.9\n0.03 0.5\n");
+    let scene = d.write(
+        "scene.toml",
+        &format!("{BUILDINGS}\n[ground_motion]\nfile = \"small.txt\"\nscale = 1.5e307\n"),
+    );
+    let (json, hist) = (d.path("out.json"), d.path("history.csv"));
+    assert_bad(
+        &run_args(&scene, &json, &hist, &[]),
+        &[
+            "ground_motion.scale",
+            "1.5e307 scales",
+            "its largest sample 2",
+            "ground velocity or displacement",
+        ],
+        &[&json, &hist],
+    );
+}
+
 #[test]
 fn record_zero_and_negative_dt() {
     let zero = at2("NPTS=    5, DT=   0.0000 SEC", VALUES5);

@@ -398,17 +398,51 @@ pub enum RecordError {
         line: usize,
         found: usize,
     },
+    /// Accelerations finite but so large that the ground velocity or displacement (the
+    /// record's exact integrals from rest, [`GroundMotion::integrals_finite`]) is not: a
+    /// record no solver can compute with (1e307 g gave a PGV of `inf` before this check).
+    #[error("{origin}: accelerations up to {pga:.3e} m/s^2 take the ground velocity or displacement beyond the range of floating point (expected a ground motion whose velocity and displacement are finite; check the record's units and values)")]
+    Unbounded { origin: String, pga: f64 },
 }
 
 /// Error of [`GroundMotion::checked_scaled`]: `factor` takes sample `sample` (1-based), of
-/// `value` m/s², beyond the range of floating point.
-#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
-#[error("{factor:e} scales sample {sample} ({value:e} m/s^2) beyond the range of floating point (expected a factor that leaves every acceleration finite)")]
+/// `value` m/s², beyond the range of floating point, or (`integrals`) leaves every sample
+/// finite but takes the record's ground velocity or displacement beyond it (`sample` then
+/// names the largest sample).
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ScaleOverflow {
     pub factor: f64,
     pub sample: usize,
     pub value: f64,
+    pub integrals: bool,
 }
+
+impl std::fmt::Display for ScaleOverflow {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let ScaleOverflow {
+            factor,
+            sample,
+            value,
+            integrals,
+        } = self;
+        if *integrals {
+            write!(
+                f,
+                "{factor:e} scales the record (its largest sample {sample}, {value:e} m/s^2) so \
+                 far that its ground velocity or displacement is beyond the range of floating \
+                 point (expected a factor that leaves them finite)"
+            )
+        } else {
+            write!(
+                f,
+                "{factor:e} scales sample {sample} ({value:e} m/s^2) beyond the range of \
+                 floating point (expected a factor that leaves every acceleration finite)"
+            )
+        }
+    }
+}
+
+impl std::error::Error for ScaleOverflow {}
 
 /// The end of a [`RecordError::Value`] message on a header-like first data line.
 const HEADER_HINT: &str = "; a header line is not read: remove it or start it with `#` (a comment)";
@@ -839,8 +873,8 @@ pub fn read_bytes(path: &Path) -> Result<Vec<u8>, RecordError> {
 const AT2_LINE4: &str = "\"NPTS= <n>, DT= <s> SEC\" or \"<n> <dt> NPTS, DT\"";
 
 impl GroundMotion {
-    /// A record from values already in m/s². Checks `dt > 0` (finite), at least two samples
-    /// and finite values.
+    /// A record from values already in m/s². Checks `dt` ([`valid_dt`]), at least two samples,
+    /// finite values and finite integrals ([`GroundMotion::integrals_finite`]).
     pub fn new(name: impl Into<String>, dt: f64, accel: Vec<f64>) -> Result<Self, RecordError> {
         let name = name.into();
         if !valid_dt(dt) {
@@ -865,7 +899,8 @@ impl GroundMotion {
                 found,
             });
         }
-        Ok(GroundMotion { name, dt, accel })
+        let origin = name.clone();
+        GroundMotion { name, dt, accel }.bounded(&origin)
     }
 
     /// Read a record file in `format` (given on purpose, not inferred). The record's name is
@@ -1027,11 +1062,12 @@ impl GroundMotion {
                 found: accel.len(),
             });
         }
-        Ok(GroundMotion {
+        GroundMotion {
             name: stem(origin),
             dt,
             accel,
-        })
+        }
+        .bounded(origin)
     }
 
     /// Parse a two-column `time accel` record. `dt` is derived from the times, which must be
@@ -1149,11 +1185,12 @@ impl GroundMotion {
                 tolerance: tol,
             });
         }
-        Ok(GroundMotion {
+        GroundMotion {
             name: stem(origin),
             dt,
             accel,
-        })
+        }
+        .bounded(origin)
     }
 
     /// Parse a record of values only (one or several per line; `#` comments and blank lines
@@ -1201,11 +1238,12 @@ impl GroundMotion {
                 found: accel.len(),
             });
         }
-        Ok(GroundMotion {
+        GroundMotion {
             name: stem(origin),
             dt,
             accel,
-        })
+        }
+        .bounded(origin)
     }
 
     /// Number of samples.
@@ -1277,16 +1315,50 @@ impl GroundMotion {
     }
 
     /// The record multiplied by `factor`, or [`ScaleOverflow`] naming the first sample the
-    /// factor takes beyond the range of floating point (a factor near the largest `f64`).
+    /// factor takes beyond the range of floating point (a factor near the largest `f64`), or,
+    /// when every sample stays finite but the ground velocity or displacement does not
+    /// ([`GroundMotion::integrals_finite`]), the largest sample.
     pub fn checked_scaled(&self, factor: f64) -> Result<Self, ScaleOverflow> {
         let scaled = self.scaled(factor);
-        match scaled.accel.iter().position(|a| !a.is_finite()) {
-            Some(i) => Err(ScaleOverflow {
+        if let Some(i) = scaled.accel.iter().position(|a| !a.is_finite()) {
+            return Err(ScaleOverflow {
                 factor,
                 sample: i + 1,
                 value: self.accel[i],
-            }),
-            None => Ok(scaled),
+                integrals: false,
+            });
+        }
+        if !scaled.integrals_finite() {
+            let i = (0..self.accel.len())
+                .max_by(|&a, &b| self.accel[a].abs().total_cmp(&self.accel[b].abs()))
+                .unwrap_or(0);
+            return Err(ScaleOverflow {
+                factor,
+                sample: i + 1,
+                value: self.accel[i],
+                integrals: true,
+            });
+        }
+        Ok(scaled)
+    }
+
+    /// Whether the ground velocity and displacement, the record's exact integrals from rest
+    /// ([`GroundMotion::pgv`], [`GroundMotion::pgd`]), are finite: accelerations finite but
+    /// near the top of the floating-point range can take them (or the jerk between samples)
+    /// beyond it, and no solver can compute with such a record.
+    pub fn integrals_finite(&self) -> bool {
+        self.pgv().is_finite() && self.pgd().is_finite()
+    }
+
+    /// `self`, or [`RecordError::Unbounded`] when its integrals are not finite.
+    fn bounded(self, origin: &str) -> Result<Self, RecordError> {
+        if self.integrals_finite() {
+            Ok(self)
+        } else {
+            Err(RecordError::Unbounded {
+                origin: origin.to_string(),
+                pga: self.pga(),
+            })
         }
     }
 
