@@ -1457,13 +1457,24 @@ fn records_whose_integrals_overflow_are_refused() {
     let m = e.to_string();
     assert!(
         m.starts_with("big.txt: accelerations up to 1.667e308 m/s^2")
-            && m.contains("ground velocity or displacement beyond the range of floating point"),
+            && m.contains("ground velocity or displacement (or the slope between two samples)")
+            && m.contains("beyond the range of floating point"),
         "{m}"
     );
     assert!(matches!(
         GroundMotion::new("big", 0.01, vec![1e307, 1.7e308, 1.7e308]),
         Err(RecordError::Unbounded { .. })
     ));
+    // Alternating samples whose difference overflows: the velocity computed from them is
+    // finite (0, the crossing's time rounding to the sample) but wrong; refused by the slopes.
+    let alternating = vec![1.7e308, -1.7e308, 1.7e308];
+    assert!(matches!(
+        GroundMotion::new("alt", 0.01, alternating.clone()),
+        Err(RecordError::Unbounded { .. })
+    ));
+    // A slope that overflows only through a short step.
+    assert!(GroundMotion::new("steep", 1e-6, vec![0.0, 1e300]).is_ok());
+    assert!(GroundMotion::new("steep", 1e-6, vec![0.0, 1e303]).is_err());
     // The same record a little smaller reads, and its integrals are finite.
     let g =
         GroundMotion::from_two_column_str("0 1e3\n0.01 1.5e3\n0.02 -1.7e3\n", "ok.txt", Units::G)

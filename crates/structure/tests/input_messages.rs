@@ -549,11 +549,16 @@ fn a_record_value_that_overflows_in_si_names_the_line() {
     let e = GroundMotion::from_two_column_str("0 0.1\n0.01 1e308\n", "big.txt", Units::G)
         .expect_err("overflow");
     assert!(matches!(e, RecordError::Overflow { line: 2, .. }), "{e}");
-    // In m/s² the same number is finite and loads.
-    let g =
+    // In m/s² the same number is finite, but its slope from 0.1 over 0.01 s (1e310 m/s³) is
+    // not: the record is refused as a whole (`Unbounded`), not at a line; 1e305 m/s² loads.
+    let e =
         GroundMotion::from_one_column_str("0.1\n1e308\n", "ok.txt", 0.01, Units::MetersPerSecond2)
+            .expect_err("slope");
+    assert!(matches!(e, RecordError::Unbounded { .. }), "{e}");
+    let g =
+        GroundMotion::from_one_column_str("0.1\n1e305\n", "ok.txt", 0.01, Units::MetersPerSecond2)
             .unwrap();
-    assert_eq!(g.accel[1], 1e308);
+    assert_eq!(g.accel[1], 1e305);
 }
 
 /// A `scale` or `pga` that takes the record beyond floating point is refused with its key

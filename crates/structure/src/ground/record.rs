@@ -401,7 +401,7 @@ pub enum RecordError {
     /// Accelerations finite but so large that the ground velocity or displacement (the
     /// record's exact integrals from rest, [`GroundMotion::integrals_finite`]) is not: a
     /// record no solver can compute with (1e307 g gave a PGV of `inf` before this check).
-    #[error("{origin}: accelerations up to {pga:.3e} m/s^2 take the ground velocity or displacement beyond the range of floating point (expected a ground motion whose velocity and displacement are finite; check the record's units and values)")]
+    #[error("{origin}: accelerations up to {pga:.3e} m/s^2 take the ground velocity or displacement (or the slope between two samples) beyond the range of floating point (expected a ground motion whose velocity and displacement are finite; check the record's units and values)")]
     Unbounded { origin: String, pga: f64 },
 }
 
@@ -1343,11 +1343,17 @@ impl GroundMotion {
     }
 
     /// Whether the ground velocity and displacement, the record's exact integrals from rest
-    /// ([`GroundMotion::pgv`], [`GroundMotion::pgd`]), are finite: accelerations finite but
-    /// near the top of the floating-point range can take them (or the jerk between samples)
-    /// beyond it, and no solver can compute with such a record.
+    /// ([`GroundMotion::pgv`], [`GroundMotion::pgd`]), and the slopes between samples they are
+    /// computed from, (a₁ − a₀)/Δt, are finite: accelerations finite but near the top of the
+    /// floating-point range can take them beyond it (two samples of ±1.7e308 m/s² gave a PGV
+    /// of 0, their difference overflowing), and no solver can compute with such a record.
     pub fn integrals_finite(&self) -> bool {
-        self.pgv().is_finite() && self.pgd().is_finite()
+        let dt = self.dt;
+        self.accel
+            .windows(2)
+            .all(|w| ((w[1] - w[0]) / dt).is_finite())
+            && self.pgv().is_finite()
+            && self.pgd().is_finite()
     }
 
     /// `self`, or [`RecordError::Unbounded`] when its integrals are not finite.
