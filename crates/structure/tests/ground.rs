@@ -889,6 +889,7 @@ fn read_valid_or_named<E: std::fmt::Display>(
             prop_assert!(gm.npts() >= 2 && gm.accel.iter().all(|a| a.is_finite()));
             prop_assert!(gm.dt.is_finite() && gm.dt >= MIN_RECORD_DT, "dt {}", gm.dt);
             prop_assert!(gm.pga().is_finite() && gm.pgv().is_finite() && gm.pgd().is_finite());
+            prop_assert!(gm.integrals_finite());
             prop_assert!(gm.accel_at(0.5 * gm.duration()).is_finite());
         }
         Err(e) => {
