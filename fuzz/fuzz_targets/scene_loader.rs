@@ -10,7 +10,6 @@
 use std::path::Path;
 
 use libfuzzer_sys::fuzz_target;
-use structure::scene::MAX_STORIES;
 use structure::Scene;
 
 fuzz_target!(|data: &[u8]| {
@@ -21,19 +20,10 @@ fuzz_target!(|data: &[u8]| {
     let text = parts.next().unwrap_or("");
     let overrides: Vec<String> = parts.map(str::to_string).collect();
     match Scene::from_str_with_overrides(text, "fuzz.toml", Path::new("."), &overrides) {
+        // A scene that loads is valid (the property tests of tests/scene.rs assert the same).
         Ok(scene) => {
-            assert!(!scene.buildings.is_empty());
-            assert!(scene.duration.is_finite() && scene.duration > 0.0);
-            for b in &scene.buildings {
-                assert!(b.validate().is_ok(), "a loaded building is valid");
-                assert!((1..=MAX_STORIES).contains(&b.n_floors()));
-            }
-            for c in &scene.contacts {
-                // A wall contact repeats its left side on the right (`Contact::wall`).
-                assert!(c.left != c.right || (c.wall && c.left_dof == c.right_dof));
-                assert!(c.left_dof < scene.buildings[c.left].n_floors());
-                assert!(c.right_dof < scene.buildings[c.right].n_floors());
-                assert!(c.gap >= 0.0 && (0.0..=1.0).contains(&c.restitution));
+            if let Some(v) = structure::testing::loaded_scene_violation(&scene) {
+                panic!("a loaded scene is invalid: {v}");
             }
         }
         Err(e) => {

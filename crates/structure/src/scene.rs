@@ -1599,25 +1599,7 @@ fn validate(
                     Some(p) => ("pga", format!("{p:e} g")),
                     None => ("scale", format!("{factor:e}")),
                 };
-                let message = if e.integrals {
-                    format!(
-                        "{v} scales {} (its largest sample {}, {:e} m/s^2) so far that its \
-                         ground velocity or displacement is beyond the range of floating point \
-                         (expected a factor that leaves them finite)",
-                        path.display(),
-                        e.sample,
-                        e.value
-                    )
-                } else {
-                    format!(
-                        "{v} scales sample {} of {} ({:e} m/s^2) beyond the range of floating \
-                         point (expected a factor that leaves every acceleration finite)",
-                        e.sample,
-                        path.display(),
-                        e.value
-                    )
-                };
-                invalid(key(k), message)
+                invalid(key(k), e.message(&v, &path.display().to_string()))
             })?;
             (
                 Some(scaled),

@@ -1,4 +1,6 @@
-//! Small scenes with closed-form answers, shared by tests and benchmarks.
+//! Small scenes with closed-form answers, shared by tests and benchmarks, and the invariants
+//! the loader and the record readers guarantee, shared by the property tests and the fuzz
+//! targets.
 
 use std::path::PathBuf;
 
@@ -131,4 +133,59 @@ pub fn stereomechanics(cr: f64) -> Scene {
         entry: 0,
     };
     free_scene(vec![a, b], vec![c], 2e-6)
+}
+
+/// What the scene loader guarantees of a scene it returns, whatever its input: at least one
+/// building, each valid with 1 ..= [`crate::scene::MAX_STORIES`] floors; a finite positive
+/// duration; contacts between two buildings (or a building and a wall, whose right side
+/// repeats its left) at existing floors, with gap ≥ 0 and c_r in [0, 1]. The property tests
+/// of `tests/scene.rs` and the fuzz target `fuzz/fuzz_targets/scene_loader.rs` assert it.
+pub fn loaded_scene_violation(scene: &Scene) -> Option<String> {
+    if scene.buildings.is_empty() {
+        return Some("no building".into());
+    }
+    if !(scene.duration.is_finite() && scene.duration > 0.0) {
+        return Some(format!("duration {}", scene.duration));
+    }
+    for b in &scene.buildings {
+        if let Err(e) = b.validate() {
+            return Some(format!("building {}: {e}", b.name));
+        }
+        if !(1..=crate::scene::MAX_STORIES).contains(&b.n_floors()) {
+            return Some(format!("building {}: {} floors", b.name, b.n_floors()));
+        }
+    }
+    for c in &scene.contacts {
+        let floors = |i: usize| scene.buildings.get(i).map_or(0, Building::n_floors);
+        let ok = (c.left != c.right || (c.wall && c.left_dof == c.right_dof))
+            && c.left_dof < floors(c.left)
+            && c.right_dof < floors(c.right)
+            && c.gap >= 0.0
+            && (0.0..=1.0).contains(&c.restitution);
+        if !ok {
+            return Some(format!("contact {c:?}"));
+        }
+    }
+    None
+}
+
+/// What the record readers guarantee of a record they return, whatever the text: at least
+/// two finite samples, a time step of at least [`crate::ground::record::MIN_RECORD_DT`], and
+/// finite peaks, slopes and integrals ([`GroundMotion::integrals_finite`]). The property
+/// tests of `tests/ground.rs` and the fuzz target `fuzz/fuzz_targets/record_reader.rs`
+/// assert it.
+pub fn read_record_violation(g: &GroundMotion) -> Option<String> {
+    if g.npts() < 2 || !g.accel.iter().all(|a| a.is_finite()) {
+        return Some(format!("{} samples, not all finite", g.npts()));
+    }
+    if !crate::ground::record::valid_dt(g.dt) {
+        return Some(format!("dt {}", g.dt));
+    }
+    if !(g.pga().is_finite() && g.integrals_finite()) {
+        return Some("peaks, slopes or integrals not finite".into());
+    }
+    if !g.accel_at(0.5 * g.duration()).is_finite() {
+        return Some("interpolation not finite".into());
+    }
+    None
 }

@@ -5,7 +5,6 @@ use std::path::{Path, PathBuf};
 
 use proptest::prelude::*;
 use structure::ground::nigam_jennings::{acceleration, Propagator};
-use structure::ground::record::MIN_RECORD_DT;
 use structure::ground::spectrum::{default_periods, response_spectrum};
 use structure::ground::{
     FormatKind, FormatRefusal, GroundMotion, RecordChoice, RecordError, RecordFormat,
@@ -876,21 +875,17 @@ fn default_periods_shape() {
 // Robustness
 // ---------------------------------------------------------------------------------------
 
-/// What every read must give, whatever the text (the fuzz target `fuzz/fuzz_targets/
-/// record_reader.rs` asserts the same): a record the solvers accept (at least two finite
-/// samples, a time step finite and at least `MIN_RECORD_DT`, peaks and interpolation
-/// defined), or an error that names the file.
+/// What every read must give, whatever the text: a record the solvers accept
+/// ([`structure::testing::read_record_violation`], which the fuzz target asserts too), or an
+/// error that names the file.
 fn read_valid_or_named<E: std::fmt::Display>(
     r: Result<GroundMotion, E>,
     file: &str,
 ) -> Result<(), TestCaseError> {
     match r {
         Ok(gm) => {
-            prop_assert!(gm.npts() >= 2 && gm.accel.iter().all(|a| a.is_finite()));
-            prop_assert!(gm.dt.is_finite() && gm.dt >= MIN_RECORD_DT, "dt {}", gm.dt);
-            prop_assert!(gm.pga().is_finite() && gm.pgv().is_finite() && gm.pgd().is_finite());
-            prop_assert!(gm.integrals_finite());
-            prop_assert!(gm.accel_at(0.5 * gm.duration()).is_finite());
+            let v = structure::testing::read_record_violation(&gm);
+            prop_assert!(v.is_none(), "{v:?}");
         }
         Err(e) => {
             let m = e.to_string();

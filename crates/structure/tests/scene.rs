@@ -849,29 +849,14 @@ fn the_scene_scales_its_record_as_the_record_does() {
     assert_eq!(s.ground.unwrap(), rec.scaled(0.37));
 }
 
-/// What every load must give, whatever the input (the fuzz target `fuzz/fuzz_targets/
-/// scene_loader.rs` asserts the same): a scene that loads is valid (buildings that validate,
-/// 1 ..= MAX_STORIES floors, a finite positive duration, contacts between two buildings, or
-/// a building and a wall, at existing floors, gap >= 0 and c_r in [0, 1]); an error names
-/// the file (`fuzz.toml`) or the `--set` expression it comes from.
+/// What every load must give, whatever the input: a scene that loads is valid
+/// ([`structure::testing::loaded_scene_violation`], which the fuzz target asserts too); an
+/// error names the file (`fuzz.toml`) or the `--set` expression it comes from.
 fn loads_valid_or_names_its_source(r: Result<Scene, SceneError>) -> Result<(), TestCaseError> {
     match r {
         Ok(scene) => {
-            prop_assert!(!scene.buildings.is_empty());
-            prop_assert!(scene.duration.is_finite() && scene.duration > 0.0);
-            for b in &scene.buildings {
-                prop_assert!(b.validate().is_ok(), "{b:?}");
-                prop_assert!((1..=MAX_STORIES).contains(&b.n_floors()));
-            }
-            for c in &scene.contacts {
-                prop_assert!(c.left != c.right || (c.wall && c.left_dof == c.right_dof));
-                prop_assert!(c.left_dof < scene.buildings[c.left].n_floors());
-                prop_assert!(c.right_dof < scene.buildings[c.right].n_floors());
-                prop_assert!(
-                    c.gap >= 0.0 && (0.0..=1.0).contains(&c.restitution),
-                    "{c:?}"
-                );
-            }
+            let v = structure::testing::loaded_scene_violation(&scene);
+            prop_assert!(v.is_none(), "{v:?}");
         }
         Err(e) => {
             let m = e.to_string();

@@ -417,28 +417,30 @@ pub struct ScaleOverflow {
     pub integrals: bool,
 }
 
-impl std::fmt::Display for ScaleOverflow {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let ScaleOverflow {
-            factor,
-            sample,
-            value,
-            integrals,
-        } = self;
-        if *integrals {
-            write!(
-                f,
-                "{factor:e} scales the record (its largest sample {sample}, {value:e} m/s^2) so \
-                 far that its ground velocity or displacement is beyond the range of floating \
-                 point (expected a factor that leaves them finite)"
+impl ScaleOverflow {
+    /// The refusal, with the scaling named `by` (the factor, or the PGA it comes from) and the
+    /// record named `record`: the message of [`Display`](std::fmt::Display) and of a scene's
+    /// `scale` or `pga`.
+    pub fn message(&self, by: &str, record: &str) -> String {
+        let (sample, value) = (self.sample, self.value);
+        if self.integrals {
+            format!(
+                "{by} scales {record} (its largest sample {sample}, {value:e} m/s^2) so far that \
+                 its ground velocity or displacement is beyond the range of floating point \
+                 (expected a factor that leaves them finite)"
             )
         } else {
-            write!(
-                f,
-                "{factor:e} scales sample {sample} ({value:e} m/s^2) beyond the range of \
+            format!(
+                "{by} scales sample {sample} of {record} ({value:e} m/s^2) beyond the range of \
                  floating point (expected a factor that leaves every acceleration finite)"
             )
         }
+    }
+}
+
+impl std::fmt::Display for ScaleOverflow {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.message(&format!("{:e}", self.factor), "the record"))
     }
 }
 
