@@ -26,11 +26,21 @@
 //!   looked for (a dip, a rise back above 0, a fall), and the crossing between the minimum
 //!   and the maximum after it.
 //!
+//! - δ₀, δ₁ < 0 with δ̇ of one sign at both ends, where the curve bounds its fourth derivative
+//!   (the momentum method): δ̇ may still turn twice inside (a minimum then a maximum, or the
+//!   reverse; at a rattle's end, where δ̇ is small beside its changes). The Hermite filter
+//!   first; if it cannot prove the window open, the maximum is located beside a point where
+//!   δ̇ has the other sign, and the crossing before it if it reaches the event. The impulse
+//!   method's dense output bounds nothing and is not searched for these (its windows are the
+//!   eighths of an error-controlled step). The momentum method's fast path sends such a
+//!   window here only if the cubic Hermite interpolant of its ends turns twice.
+//!
 //! A contact just resolved is searched at δ = `shift` (its round-off band) until its gap
 //! has opened beyond −`shift`; where it opens that far and closes again within one window,
 //! it is re-armed at the minimum and the closure is the crossing of δ = 0 after it (not of
-//! δ = `shift`, which would be late by shift/δ̇). The callers re-arm it at a window's end
-//! where its gap is beyond −`shift` there.
+//! δ = `shift`, which would be late by shift/δ̇), also where the window ends after the
+//! free-flight curve's maximum (a rattle's flight shorter than the window). The callers
+//! re-arm it at a window's end where its gap is beyond −`shift` there.
 //!
 //! Roots: the `roots` crate's Brent ([`find_root_brent`], with a memory of its evaluations),
 //! absolute tolerance in s given by the caller (2ε·t in both methods).
@@ -259,7 +269,7 @@ impl Search {
         let (lo, tau) = (self.lo, self.hi);
         // Where a contact at rest (δ̇₀ round-off) reads its direction.
         let start = lo + (tau - lo) * AT_REST_PROBE;
-        if self.shift > 0.0 && dd1 > 0.0 && d1 + self.shift >= 0.0 {
+        if self.shift > 0.0 && d1 + self.shift >= 0.0 && (dd1 > 0.0 || d1 >= 0.0) {
             // A contact not yet re-armed (searched at δ = shift) that falls and rises again
             // within the window to δ ≥ 0: if its gap opened beyond −shift at the minimum, it
             // is re-armed there and the closure is the crossing of δ = 0 after it. Whether it
@@ -277,10 +287,25 @@ impl Search {
                 None
             };
             if let Some(from) = falls_from {
-                let s_min = self.brent(c, from, tau, true);
-                if self.delta(c, s_min) + self.shift < -self.shift {
-                    self.shift = 0.0;
-                    return Some(self.brent(c, s_min, tau, false));
+                if dd1 > 0.0 {
+                    let s_min = self.brent(c, from, tau, true);
+                    if self.delta(c, s_min) + self.shift < -self.shift {
+                        self.shift = 0.0;
+                        return Some(self.brent(c, s_min, tau, false));
+                    }
+                } else if let Some(rise) = self.point_where(c, from, tau, true) {
+                    // A flight shorter than the window (a rattle): the free-flight curve crosses
+                    // δ = 0, reaches a maximum and turns down again before the window's end,
+                    // still at or above the band there (δ̇₁ ≤ 0 ≤ δ₁ − shift). The minimum lies
+                    // before a point where δ̇ > 0 and the maximum after it; the crossing of
+                    // δ = 0 between them is the only one. Without this case it was found at
+                    // δ = shift, late by shift/δ̇ (random seed 9906: 4.4e-10 s at 1.5e-3 m/s).
+                    let s_min = self.brent(c, from, rise, true);
+                    if self.delta(c, s_min) + self.shift < -self.shift {
+                        self.shift = 0.0;
+                        let s_max = self.brent(c, rise, tau, true);
+                        return Some(self.brent(c, s_min, s_max, false));
+                    }
                 }
             }
         }
@@ -391,20 +416,55 @@ impl Search {
             if self.delta(c, s_max) >= 0.0 {
                 return Some(self.brent(c, lo, s_max, false));
             }
+            return None;
+        }
+        // Two extrema with δ below the event at both ends: δ̇ turns twice inside the window
+        // (δ̇ small beside the changes of δ̈: floors moving nearly together, at the end of a
+        // rattle), a minimum then a maximum (δ̇₀ ≤ 0, δ̇₁ < 0) or a maximum then a minimum
+        // (δ̇₀ > 0, δ̇₁ ≥ 0), and the maximum may reach the event. Searched where the curve
+        // bounds its fourth derivative (the momentum method), after the Hermite filter,
+        // which proves most such windows open: the maximum is located beside a point where
+        // δ̇ has the other sign. Missed before (random seed 9906 on its record refined 2×: a
+        // contact re-armed at a step's end closed again at 6.1e-4 m/s inside the next
+        // window, δ falling at both its ends; an impact lost, the floors through each other
+        // for a moment). The impulse method's curve bounds nothing and is not searched here
+        // (a scan per window and step would multiply its event cost): its windows are the
+        // eighths of an error-controlled step, a quartic each.
+        let two_extrema = (dd0 <= 0.0 && dd1 < 0.0) || (dd0 > 0.0 && dd1 >= 0.0);
+        if two_extrema && c.derivative_bound(2).is_some() {
+            if self.max_bound(c, d0, dd0, d1, dd1) < 0.0 {
+                return None;
+            }
+            if dd1 < 0.0 {
+                let rise = self.point_where(c, lo, tau, true)?;
+                let s_max = self.brent(c, rise, tau, true);
+                if self.delta(c, s_max) < 0.0 {
+                    return None;
+                }
+                let s_min = self.brent(c, lo, rise, true);
+                return Some(self.brent(c, s_min, s_max, false));
+            }
+            let fall = self.point_where(c, lo, tau, false)?;
+            let s_max = self.brent(c, lo, fall, true);
+            if self.delta(c, s_max) < 0.0 {
+                return None;
+            }
+            return Some(self.brent(c, lo, s_max, false));
         }
         None
     }
 
     /// Whether the cheap tests alone prove that nothing closes (the momentum method's fast
-    /// path).
+    /// path): below zero at both ends and, unless δ̇ rises from ≤ 0 to ≥ 0 (a minimum), the
+    /// Hermite bound below zero (an interior maximum, or two extrema).
     pub fn surely_open(&self, c: &impl GapCurve, d0: f64, dd0: f64, d1: f64, dd1: f64) -> bool {
         if d0 >= 0.0 || d1 >= 0.0 {
             return false;
         }
-        if dd0 > 0.0 && dd1 < 0.0 {
-            return self.max_bound(c, d0, dd0, d1, dd1) < 0.0;
+        if dd0 <= 0.0 && dd1 >= 0.0 {
+            return true;
         }
-        true
+        self.max_bound(c, d0, dd0, d1, dd1) < 0.0
     }
 }
 
@@ -585,6 +645,85 @@ mod tests {
         let (r, search) = locate(c, true, shift);
         assert!((r.unwrap() - exact).abs() < 1e-12, "{r:?} vs {exact}");
         assert_eq!(search.shift, shift);
+    }
+
+    /// A contact just resolved that rebounds beyond its band, turns, crosses δ = 0 and, on the
+    /// free-flight curve the search reads (no impact yet), reaches a maximum and turns down
+    /// again before the window's end, still above the band there (δ̇₁ < 0 ≤ δ₁ − shift): a
+    /// rattle whose flights are shorter than the window. Re-armed at the minimum, it closes at
+    /// the crossing of δ = 0, with or without bounds. Before, only a window ending on the rise
+    /// (δ̇₁ > 0) was re-armed; this one was found at δ = shift, late by shift/δ̇ (random seed
+    /// 9906, c_r = 0.8: impacts 75 and 76 of a rattle at 1.5e-3 and 1.0e-3 m/s, 4.4e-10 s
+    /// late; on the record refined 2×, a touching closure at 9.6e-5 m/s 6.8e-9 s late, whose
+    /// difference the rattle after it amplified into another impact count).
+    #[test]
+    fn a_resolved_contact_that_rebounds_and_closes_within_the_window_is_re_armed() {
+        let shift = 1e-9;
+        // δ = −s + 6 s² − 4.9 s³: a minimum −0.045 at s = 0.094, zero at s* below, a maximum at
+        // 0.72, δ(1) = 0.1 with δ̇(1) = −3.7.
+        let c = [0.0, -1.0, 6.0, -4.9, 0.0];
+        let exact = (6.0 - (36.0f64 - 19.6).sqrt()) / 9.8;
+        for bounded in [true, false] {
+            let (r, search) = locate(c, bounded, shift);
+            let s = r.unwrap_or_else(|| panic!("missed (bounded {bounded})"));
+            assert!(
+                (s - exact).abs() < 1e-12,
+                "bounded {bounded}: {s} vs {exact}"
+            );
+            assert_eq!(search.shift, 0.0, "re-armed");
+        }
+        // The same rebound 1.5e-8 times smaller dips 0.68e-9, within the band: not re-armed,
+        // its closure is at δ = shift.
+        let shallow = c.map(|x| x * 1.5e-8);
+        let late = first_reach(shallow, shift).unwrap();
+        let (r, search) = locate(shallow, true, shift);
+        assert!((r.unwrap() - late).abs() < 1e-12, "{r:?} vs {late}");
+        assert_eq!(search.shift, shift);
+    }
+
+    /// An armed contact below zero at both ends of the window whose δ̇ turns twice inside it,
+    /// a minimum then a maximum (δ̇ < 0 at both ends) or a maximum then a minimum (δ̇ > 0 at
+    /// both ends), the maximum above zero: found at the first crossing where the curve
+    /// bounds its fourth derivative (the momentum method), and the fast path's test does not
+    /// call the window open; lowered by 0.5 (maxima 0.05 and 0.046 below zero) the windows are
+    /// open, and the Hermite filter proves it without a search. Missed before (random seed
+    /// 9906 on its record refined 2×: a contact re-armed at a step's end closed again at
+    /// 6.1e-4 m/s inside the next window). A curve that bounds nothing (the impulse method's
+    /// dense output) is not searched for them.
+    #[test]
+    fn two_extrema_below_zero_at_both_ends_are_searched() {
+        // −0.01 − s + 6 s² − 5.2 s³: minimum at 0.095, maximum 0.45 at 0.674, δ̇(1) = −4.6.
+        // −0.05 + s − 3 s² + 2 s³: maximum 0.046 at 0.211, minimum at 0.789, δ̇(1) = 1.
+        for c in [[-0.01, -1.0, 6.0, -5.2, 0.0], [-0.05, 1.0, -3.0, 2.0, 0.0]] {
+            let exact = first_reach(c, 0.0).unwrap();
+            let (r, search) = locate(c, true, 0.0);
+            let s = r.unwrap_or_else(|| panic!("missed: {c:?}"));
+            assert!((s - exact).abs() < 1e-12, "{s} vs {exact}");
+            assert!(search.iterations > 0);
+            let (r, _) = locate(c, false, 0.0);
+            assert_eq!(r, None, "searched without bounds");
+            let curve = Cubic { c, bounded: true };
+            let window = Search {
+                lo: 0.0,
+                hi: 1.0,
+                tol: 0.0,
+                shift: 0.0,
+                band: 0.0,
+                iterations: 0,
+            };
+            let (d0, dd0) = (c[0], c[1]);
+            let d1 = c.iter().sum::<f64>();
+            let dd1 = c[1] + 2.0 * c[2] + 3.0 * c[3] + 4.0 * c[4];
+            assert!(!window.surely_open(&curve, d0, dd0, d1, dd1), "{c:?}");
+            let lower = [c[0] - 0.5, c[1], c[2], c[3], c[4]];
+            let (r, search) = locate(lower, true, 0.0);
+            assert_eq!((r, search.iterations), (None, 0), "{lower:?}");
+            let curve = Cubic {
+                c: lower,
+                bounded: true,
+            };
+            assert!(window.surely_open(&curve, d0 - 0.5, dd0, d1 - 0.5, dd1));
+        }
     }
 
     /// A touching contact approaching (8.6e-3 m/s) that turns back below its start within the

@@ -41,6 +41,57 @@ pub struct Interval {
 
 pub use crate::response::hermite_extremum;
 
+/// The estimate of an interior extremum of a quantity whose rate has one sign at both ends
+/// of the interval (ẏ0 ẏ1 ≥ 0), flagged because it may turn twice inside near its peak
+/// (`observe::sample`): from the cubic Hermite interpolant H of (y0, ẏ0, y1, ẏ1) over
+/// `len`, whose derivative is then either of one sign on [0, 1] or has two roots there.
+/// With two, the one of larger |H|, as (θ, H(θ)) (θ ∈ (0, 1), the fraction of `len`);
+/// with none (H monotone, the turns if any hidden in its error), the point where |H′| is
+/// least and the end value of larger |y|, a start for Newton's method that cannot raise
+/// the peak by itself.
+/// Whether the cubic Hermite interpolant of (y0, ẏ0, y1, ẏ1) over `len` turns twice inside
+/// the interval: its derivative m0 + 2c2θ + 3c3θ² (m = ẏ len, Δ = y1 − y0, c2 = 3Δ − 2m0 − m1,
+/// c3 = m0 + m1 − 2Δ) has its vertex in (0, 1), where it has the other sign than m0 (and so
+/// than m1 too, the rates then of one sign). The scalar form of the test in
+/// `observe::sample`, the same operations.
+#[inline(always)]
+pub fn turns_twice(y0: f64, yd0: f64, y1: f64, yd1: f64, len: f64) -> bool {
+    let dy = y1 - y0;
+    let (m0, m1) = (yd0 * len, yd1 * len);
+    let c2 = 3.0 * dy - 2.0 * m0 - m1;
+    let c3 = m0 + m1 - 2.0 * dy;
+    let m0c3 = m0 * c3;
+    0.0 < m0c3 && m0 * c2 < 0.0 && c2.abs() < 3.0 * c3.abs() && 3.0 * m0c3 < c2 * c2
+}
+
+pub fn double_turn_estimate(y0: f64, yd0: f64, y1: f64, yd1: f64, len: f64) -> (f64, f64) {
+    let (m0, m1) = (yd0 * len, yd1 * len);
+    let c1 = m0;
+    let c2 = -3.0 * y0 - 2.0 * m0 + 3.0 * y1 - m1;
+    let c3 = 2.0 * y0 + m0 - 2.0 * y1 + m1;
+    let h = |t: f64| y0 + t * (c1 + t * (c2 + t * c3));
+    // H′(θ) = a θ² + b θ + c.
+    let (a, b, c) = (3.0 * c3, 2.0 * c2, c1);
+    let mut best: Option<(f64, f64)> = None;
+    let disc = b * b - 4.0 * a * c;
+    if a != 0.0 && disc > 0.0 {
+        let q = -0.5 * (b + b.signum() * disc.sqrt());
+        for t in [q / a, if q != 0.0 { c / q } else { f64::NAN }] {
+            if t > 0.0 && t < 1.0 && best.is_none_or(|(_, v)| h(t).abs() > v.abs()) {
+                best = Some((t, h(t)));
+            }
+        }
+    }
+    best.unwrap_or_else(|| {
+        let tv = if a != 0.0 {
+            (-b / (2.0 * a)).clamp(0.0, 1.0)
+        } else {
+            0.5
+        };
+        (tv, if y0.abs() >= y1.abs() { y0 } else { y1 })
+    })
+}
+
 /// The closed-form arcs of the modes `range` over the interval `iv`.
 pub fn arcs(modal: &Modal, range: std::ops::Range<usize>, iv: &Interval) -> Vec<Arc> {
     arcs_of(
@@ -403,6 +454,28 @@ pub fn refine_at(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The double-turn estimate is exact on a cubic: y = θ³ − 1.2 θ² + 0.4 θ over len 1 rises
+    /// at both ends (ẏ = 0.4 and 1.0) and turns twice inside, a maximum 0.0407 at
+    /// θ = (1.2 − √0.24)/3 and a minimum 0.0233 at (1.2 + √0.24)/3: the estimate is the
+    /// critical point of larger |H|, the maximum, the same over len 2 with the rates halved.
+    /// A monotone cubic (y = θ³ + θ) gives the end of larger |y| and θ where the slope is
+    /// least (0).
+    #[test]
+    fn double_turn_estimates_are_the_cubics_critical_points() {
+        let y = |t: f64| t * t * t - 1.2 * t * t + 0.4 * t;
+        let (t1, t2) = ((1.2 - 0.24f64.sqrt()) / 3.0, (1.2 + 0.24f64.sqrt()) / 3.0);
+        let want = if y(t1).abs() >= y(t2).abs() { t1 } else { t2 };
+        let (th, h) = double_turn_estimate(y(0.0), 0.4, y(1.0), 1.0, 1.0);
+        assert!((th - want).abs() < 1e-12, "{th} vs {want}");
+        assert!((h - y(want)).abs() < 1e-14, "{h}");
+        // Over len 2 the rates are per unit time: the same shape.
+        let (th2, h2) = double_turn_estimate(y(0.0), 0.2, y(1.0), 0.5, 2.0);
+        assert!((th2 - th).abs() < 1e-12 && (h2 - h).abs() < 1e-14);
+        // Monotone: y = θ³ + θ (ẏ = 1 at 0, 4 at 1).
+        let (th, h) = double_turn_estimate(0.0, 1.0, 2.0, 4.0, 1.0);
+        assert_eq!((th, h), (0.0, 2.0));
+    }
 
     /// Stored intervals come back as stored, across the blocks of `Deferred::state` (a
     /// `Deferred::new` one and a default one, held-contact loads on some).

@@ -995,7 +995,17 @@ impl<'a> Stepper<'a> {
                 if cur.0 >= 0.0 {
                     return Ok(None);
                 }
-                if prev.1 > 0.0 && cur.1 < 0.0 {
+                // Below zero at both ends: open unless δ has an interior maximum, where δ̇ falls
+                // from > 0 to < 0, or where it turns twice with one sign at both ends (a
+                // rattle's end: the cubic Hermite interpolant of the window's ends turns twice,
+                // `peaks::turns_twice`; a double turn hidden within the cubic's error,
+                // len⁴/384·max|δ⁗|, is not looked for). The slopes bound δ first, at no cost:
+                // |δ̇| ≤ √W_c·vbound, so δ ≤ (δ₀ + δ₁ + len·max|δ̇|)/2 over the window. Then the
+                // rigorous Hermite bound of `Search::surely_open`.
+                let len = h / sub as f64;
+                let maximum = (prev.1 > 0.0 && cur.1 < 0.0)
+                    || super::peaks::turns_twice(prev.0, prev.1, cur.0, cur.1, len);
+                if maximum && prev.0 + cur.0 + len * p.sqrt_w[ci] * vbound * (1.0 + 1e-9) >= 0.0 {
                     if !arcs_built {
                         self.build_arcs(a0, a1, h, None);
                         arcs_built = true;
