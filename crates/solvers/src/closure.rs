@@ -497,17 +497,22 @@ mod tests {
         }
     }
 
-    /// The search over [0, 1] at `shift`, from the curve's own end values.
-    fn locate(c: [f64; 5], bounded: bool, shift: f64) -> (Option<f64>, Search) {
-        let mut curve = Cubic { c, bounded };
-        let mut search = Search {
+    /// A search window [0, 1] at `shift` (root tolerance 4ε, band 1e-9).
+    fn unit_window(shift: f64) -> Search {
+        Search {
             lo: 0.0,
             hi: 1.0,
             tol: 4.0 * f64::EPSILON,
             shift,
             band: 1e-9,
             iterations: 0,
-        };
+        }
+    }
+
+    /// The search over [0, 1] at `shift`, from the curve's own end values.
+    fn locate(c: [f64; 5], bounded: bool, shift: f64) -> (Option<f64>, Search) {
+        let mut curve = Cubic { c, bounded };
+        let mut search = unit_window(shift);
         let (d0, dd0) = (curve.delta(0.0) - shift, curve.rate(0.0));
         let (d1, dd1) = (curve.delta(1.0) - shift, curve.rate(1.0));
         let r = search.locate(&mut curve, d0, dd0, d1, dd1);
@@ -585,14 +590,7 @@ mod tests {
         };
         for bounded in [true, false] {
             let mut curve = Cubic { c, bounded };
-            let mut search = Search {
-                lo: 0.0,
-                hi: 1.0,
-                tol: 4.0 * f64::EPSILON,
-                shift: 0.0,
-                band: 1e-9,
-                iterations: 0,
-            };
+            let mut search = unit_window(0.0);
             // The state's δ̇₀ is −round-off.
             let dd1 = curve.rate(1.0);
             let r = search.locate(&mut curve, 0.0, -1e-17, 0.3, dd1);
@@ -703,14 +701,7 @@ mod tests {
             let (r, _) = locate(c, false, 0.0);
             assert_eq!(r, None, "searched without bounds");
             let curve = Cubic { c, bounded: true };
-            let window = Search {
-                lo: 0.0,
-                hi: 1.0,
-                tol: 0.0,
-                shift: 0.0,
-                band: 0.0,
-                iterations: 0,
-            };
+            let window = unit_window(0.0);
             let (d0, dd0) = (c[0], c[1]);
             let d1 = c.iter().sum::<f64>();
             let dd1 = c[1] + 2.0 * c[2] + 3.0 * c[3] + 4.0 * c[4];

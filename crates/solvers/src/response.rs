@@ -219,6 +219,18 @@ impl ResponseTracker {
     }
 }
 
+/// The coefficients [c1, c2, c3] of the cubic Hermite interpolant of (y0, ẏ0) and (y1, ẏ1)
+/// over an interval of length `len`, H(θ) = y0 + c1 θ + c2 θ² + c3 θ³ (θ from 0 to 1).
+#[inline]
+pub fn hermite_cubic(y0: f64, yd0: f64, y1: f64, yd1: f64, len: f64) -> [f64; 3] {
+    let (m0, m1) = (yd0 * len, yd1 * len);
+    [
+        m0,
+        -3.0 * y0 - 2.0 * m0 + 3.0 * y1 - m1,
+        2.0 * y0 + m0 - 2.0 * y1 + m1,
+    ]
+}
+
 /// Position θ ∈ (0, 1) and value of the interior extremum of the cubic Hermite interpolant
 /// of (y0, ẏ0) and (y1, ẏ1) over an interval of length `len`, if ẏ changes sign: the
 /// detector of peaks between samples (both event-driven solvers).
@@ -226,12 +238,9 @@ pub fn hermite_extremum(y0: f64, yd0: f64, y1: f64, yd1: f64, len: f64) -> Optio
     if !(yd0 * yd1 < 0.0) || !(len > 0.0) {
         return None;
     }
-    let (m0, m1) = (yd0 * len, yd1 * len);
-    // H(θ) = y0 + c1 θ + c2 θ² + c3 θ³; H'(θ) = c1 + 2 c2 θ + 3 c3 θ² changes sign on
-    // [0, 1] (H'(0) = m0, H'(1) = m1), so it has exactly one root there: bisection.
-    let c1 = m0;
-    let c2 = -3.0 * y0 - 2.0 * m0 + 3.0 * y1 - m1;
-    let c3 = 2.0 * y0 + m0 - 2.0 * y1 + m1;
+    // H'(θ) = c1 + 2 c2 θ + 3 c3 θ² changes sign on [0, 1] (H'(0) = m0, H'(1) = m1), so it
+    // has exactly one root there: bisection.
+    let [c1, c2, c3] = hermite_cubic(y0, yd0, y1, yd1, len);
     let theta = quadratic_root_in_unit(3.0 * c3, 2.0 * c2, c1);
     Some((theta, y0 + theta * (c1 + theta * (c2 + theta * c3))))
 }

@@ -16,9 +16,9 @@
 //! bound len⁴/384·max|y⁗| (the same margin the cheap filter relies on). Before the double
 //! turns were flagged, held-out random seeds 8694 and 9401 reported a floor's peak 5.7e-7
 //! and 3.7e-6 below the impulse method's (the sample at the interval's end, the interior
-//! maximum missed); the flag costs about 10 % more instructions per paper-scene analysis
-//! (its necessary condition is tested for every quantity and sample, the test itself only
-//! for the vectors where that passes).
+//! maximum missed); the flag costs 2.33 M instructions per paper-scene analysis (about 9 %
+//! of the 26.26 M before; its necessary condition, [`peaks::may_turn_twice`], is tested for
+//! every quantity and sample, the test itself only for the vectors where that passes).
 //!
 //! **Energy envelope.** A building whose response cannot reach any of its peaks over the
 //! interval is not observed at all. For y = Σ_n c_n q_n over the building's modes,
@@ -795,12 +795,9 @@ fn sample<S: pulp::Simd>(
     let (u0, ubelow) = (&u0[..m], &ubelow[..m]);
     let (zero, one) = (simd.splat_f64s(0.0), simd.splat_f64s(1.0));
     let mut rv = simd.less_than_f64s(one, zero);
-    // Whether the cubic Hermite interpolant H(θ) of a quantity over the interval (θ from 0
-    // to 1) turns twice inside it while its rate has one sign at both ends (see
-    // `peaks::double_turn_estimate`): with m0 = ẏ0 len, m1 = ẏ1 len, Δ = y1 − y0,
-    // c2 = 3Δ − 2m0 − m1 and c3 = m0 + m1 − 2Δ, H′ = m0 + 2c2θ + 3c3θ² has its vertex
-    // θv = −c2/(3c3) in (0, 1) and H′(θv) of the other sign than m0 exactly when
-    // m0 c3 > 0, m0 c2 < 0, |c2| < 3|c3| and c2² > 3 m0 c3.
+    // Whether the cubic Hermite interpolant of a quantity over the interval turns twice
+    // inside it while its rate has one sign at both ends: `peaks::turns_twice`, the same
+    // operations (m0 c3 > 0, m0 c2 < 0, |c2| < 3|c3| and c2² > 3 m0 c3).
     let (two, three, lenv) = (
         simd.splat_f64s(2.0),
         simd.splat_f64s(3.0),
@@ -809,13 +806,12 @@ fn sample<S: pulp::Simd>(
     let (half, three_halves) = (simd.splat_f64s(0.5), simd.splat_f64s(1.5));
     // (0 for an interval of length 0, which has no interior: `double_turn` is then false,
     // and the caller ignores the flags of such a sample anyway.)
-    let inv_len = simd.splat_f64s(if s.len > 0.0 { 1.0 / s.len } else { 0.0 });
-    // A necessary condition of `double_turn`, cheaper: with D = (m0 + m1)/2 − Δ,
-    // H′(θ) = (1 − θ) m0 + θ m1 − 6Dθ(1 − θ), so a dip of H′ to the other sign than its ends
-    // needs D of their sign and 1.5|D| > min(|m0|, |m1|) (θ(1 − θ) ≤ 1/4).
+    let inv_len_s = if s.len > 0.0 { 1.0 / s.len } else { 0.0 };
+    let inv_len = simd.splat_f64s(inv_len_s);
+    // A necessary condition of `double_turn`, cheaper: `peaks::may_turn_twice`, the same
+    // operations.
     macro_rules! may_turn_twice {
         ($y0:expr, $y1:expr, $r0:expr, $r1:expr) => {{
-            // (In rates: D/len, with the ends' rates themselves.)
             let dd = simd.sub_f64s(
                 simd.mul_f64s(half, simd.add_f64s($r0, $r1)),
                 simd.mul_f64s(simd.sub_f64s($y1, $y0), inv_len),
@@ -939,13 +935,17 @@ fn sample<S: pulp::Simd>(
             kt[i] * (udpt[i] - pbelowt[i]),
             kt[i] * (udt[i] - vbelowt[i]),
         );
-        let d_two = peaks::turns_twice(u0t[i], udpt[i], ut[i], udt[i], s.len);
-        let s_two = peaks::turns_twice(
+        // (The vectors' decision: the necessary condition, then the test.)
+        let two = |y0: f64, r0: f64, y1: f64, r1: f64| {
+            peaks::may_turn_twice(y0, r0, y1, r1, inv_len_s)
+                && peaks::turns_twice(y0, r0, y1, r1, s.len)
+        };
+        let d_two = two(u0t[i], udpt[i], ut[i], udt[i]);
+        let s_two = two(
             kt[i] * (u0t[i] - ubelowt[i]),
             r0,
             kt[i] * (ut[i] - belowt[i]),
             r1,
-            s.len,
         );
         let (d_turn, s_turn) = (udpt[i] * udt[i] < 0.0 || d_two, r0 * r1 < 0.0 || s_two);
         let f = f0 + i;

@@ -49,6 +49,17 @@ pub use crate::response::hermite_extremum;
 /// with none (H monotone, the turns if any hidden in its error), the point where |H′| is
 /// least and the end value of larger |y|, a start for Newton's method that cannot raise
 /// the peak by itself.
+/// A necessary condition of [`turns_twice`], cheaper, in rates (`inv_len` = 1/len): with
+/// D = (ẏ0 + ẏ1)/2 − (y1 − y0)/len, H′(θ)/len = (1 − θ) ẏ0 + θ ẏ1 − 6Dθ(1 − θ), so a dip of
+/// H′ to the other sign than its ends needs D of their sign and 1.5|D| > min(|ẏ0|, |ẏ1|)
+/// (θ(1 − θ) ≤ 1/4). The scalar form of the test in `observe::sample`, the same operations:
+/// the sample's vectors and its scalar tail decide alike, on every instruction set.
+#[inline(always)]
+pub fn may_turn_twice(y0: f64, yd0: f64, y1: f64, yd1: f64, inv_len: f64) -> bool {
+    let dd = 0.5 * (yd0 + yd1) - (y1 - y0) * inv_len;
+    0.0 < dd * yd0 && yd0.abs().min(yd1.abs()) < 1.5 * dd.abs()
+}
+
 /// Whether the cubic Hermite interpolant of (y0, ẏ0, y1, ẏ1) over `len` turns twice inside
 /// the interval: its derivative m0 + 2c2θ + 3c3θ² (m = ẏ len, Δ = y1 − y0, c2 = 3Δ − 2m0 − m1,
 /// c3 = m0 + m1 − 2Δ) has its vertex in (0, 1), where it has the other sign than m0 (and so
@@ -65,10 +76,7 @@ pub fn turns_twice(y0: f64, yd0: f64, y1: f64, yd1: f64, len: f64) -> bool {
 }
 
 pub fn double_turn_estimate(y0: f64, yd0: f64, y1: f64, yd1: f64, len: f64) -> (f64, f64) {
-    let (m0, m1) = (yd0 * len, yd1 * len);
-    let c1 = m0;
-    let c2 = -3.0 * y0 - 2.0 * m0 + 3.0 * y1 - m1;
-    let c3 = 2.0 * y0 + m0 - 2.0 * y1 + m1;
+    let [c1, c2, c3] = crate::response::hermite_cubic(y0, yd0, y1, yd1, len);
     let h = |t: f64| y0 + t * (c1 + t * (c2 + t * c3));
     // H′(θ) = a θ² + b θ + c.
     let (a, b, c) = (3.0 * c3, 2.0 * c2, c1);

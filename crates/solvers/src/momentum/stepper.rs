@@ -1003,9 +1003,10 @@ impl<'a> Stepper<'a> {
                 // |δ̇| ≤ √W_c·vbound, so δ ≤ (δ₀ + δ₁ + len·max|δ̇|)/2 over the window. Then the
                 // rigorous Hermite bound of `Search::surely_open`.
                 let len = h / sub as f64;
-                let maximum = (prev.1 > 0.0 && cur.1 < 0.0)
-                    || super::peaks::turns_twice(prev.0, prev.1, cur.0, cur.1, len);
-                if maximum && prev.0 + cur.0 + len * p.sqrt_w[ci] * vbound * (1.0 + 1e-9) >= 0.0 {
+                if prev.0 + cur.0 + len * p.sqrt_w[ci] * vbound * (1.0 + 1e-9) >= 0.0
+                    && ((prev.1 > 0.0 && cur.1 < 0.0)
+                        || super::peaks::turns_twice(prev.0, prev.1, cur.0, cur.1, len))
+                {
                     if !arcs_built {
                         self.build_arcs(a0, a1, h, None);
                         arcs_built = true;
