@@ -19,6 +19,10 @@
 //! maximum missed); the flag costs 2.33 M instructions per paper-scene analysis (about 9 %
 //! of the 26.26 M before; its necessary condition, [`peaks::may_turn_twice`], is tested for
 //! every quantity and sample, the test itself only for the vectors where that passes).
+//! The overlap audit flags its pairs alike (`DoubleTurn`, shared; defect 19: a pair's
+//! maximum 1.05e-7 low in the modes study's GAZLI run with 13 modes per building), its
+//! estimate the cubic's local maximum ([`peaks::double_turn_maximum`]): 0.57 M instructions
+//! per paper-scene analysis (28.79 M → 29.36 M).
 //!
 //! **Energy envelope.** A building whose response cannot reach any of its peaks over the
 //! interval is not observed at all. For y = Σ_n c_n q_n over the building's modes,
@@ -428,14 +432,16 @@ impl Stepper<'_> {
 
     /// The overlap audit at the current sample: u_left − u_right of every audited pair at
     /// the sample and, when its rate changes sign from + to − over the interval since the
-    /// previous sample (length `len`), a candidate interior maximum, found as the
-    /// story-shear and displacement peaks are (Hermite estimate, cheap filter, rigorous
+    /// previous sample (length `len`), or has one sign at both ends while its cubic Hermite
+    /// interpolant turns twice inside ([`DoubleTurn`], defect 19), a candidate interior
+    /// maximum, found as the story-shear and displacement peaks are (Hermite estimate,
+    /// [`peaks::hermite_extremum`] or [`peaks::double_turn_maximum`], cheap filter, rigorous
     /// Hermite error bound over both buildings' modes, deferred refinement).
     #[inline(always)]
     fn observe_overlaps<S: pulp::Simd>(&mut self, simd: S, len: f64, stored: &mut Option<usize>) {
         // First pass, every pair: the sample (a running maximum, branch-free) and whether the
         // rate turns from + to − over the interval (rare: only those go on).
-        let (turns, raised) = pulp::WithSimd::with_simd(OverlapPass { st: self }, simd);
+        let (turns, raised) = pulp::WithSimd::with_simd(OverlapPass { st: self, len }, simd);
         self.overlap_stale |= raised;
         if !(len > 0.0) || !turns {
             return;
@@ -448,7 +454,8 @@ impl Stepper<'_> {
     }
 
     /// The rare slow path of overlap pair `k` whose rate turns from + to − over the
-    /// interval of length `len` (see [`Stepper::observe_overlaps`]).
+    /// interval of length `len`, or may turn twice inside it (see
+    /// [`Stepper::observe_overlaps`]).
     #[cold]
     #[inline(never)]
     fn overlap_extremum(&mut self, k: usize, len: f64, stored: &mut Option<usize>) {
@@ -467,7 +474,13 @@ impl Stepper<'_> {
         if bound + 0.1 * bound.abs() < best {
             return;
         }
-        let Some((th, h)) = peaks::hermite_extremum(y0, yd0, y1, yd1, len) else {
+        // Rates of one sign at both ends: flagged as a possible double turn (`OverlapPass`).
+        let estimate = if yd0 * yd1 >= 0.0 {
+            Some(peaks::double_turn_maximum(y0, yd0, y1, yd1, len))
+        } else {
+            peaks::hermite_extremum(y0, yd0, y1, yd1, len)
+        };
+        let Some((th, h)) = estimate else {
             return;
         };
         // Cheap filter, as for the peaks: the Hermite error is a small fraction of the
@@ -581,10 +594,13 @@ impl Stepper<'_> {
 
 /// The first pass of the overlap audit over every pair (see [`Stepper::observe_overlaps`]),
 /// in vectors of the widest instruction set: the running maxima (and their times) of
-/// u_left − u_right, and whether each pair's rate turns from + to − over the interval
-/// (`overlap_turn`: 1 or 0). Returns (some rate turns, some maximum was raised).
+/// u_left − u_right, and whether each pair's rate turns from + to − over the interval or
+/// may turn twice inside it ([`DoubleTurn`]) (`overlap_turn`: 1 or 0). Returns (some pair
+/// is flagged, some maximum was raised).
 struct OverlapPass<'s, 'a> {
     st: &'s mut Stepper<'a>,
+    /// Length of the interval since the previous sample, s.
+    len: f64,
 }
 
 impl pulp::WithSimd for OverlapPass<'_, '_> {
@@ -593,7 +609,7 @@ impl pulp::WithSimd for OverlapPass<'_, '_> {
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, simd: S) -> (bool, bool) {
         let st = self.st;
-        let (u, ud, udp) = (&st.u, &st.ud, &st.ud_prev);
+        let (u, ud, up, udp) = (&st.u, &st.ud, &st.u_prev, &st.ud_prev);
         // (`Stepper::floors_at` by hand: `st` is borrowed by field below.)
         let stride = st.fs + 1;
         let now = st.s.t;
@@ -608,19 +624,33 @@ impl pulp::WithSimd for OverlapPass<'_, '_> {
             simd.less_than_f64s(one, zero),
         );
         let (mut turns, mut raised) = (false, false);
+        let two_turns = DoubleTurn::new(simd, self.len);
         // One vector of pairs (a macro, not a closure: closures do not inherit the
         // instruction set).
         macro_rules! pass {
-            ($max:expr, $time:expr, $flag:expr, $ul:expr, $ur:expr, $vl:expr, $vr:expr, $pl:expr, $pr:expr) => {{
+            ($max:expr, $time:expr, $flag:expr, $ul:expr, $ur:expr, $vl:expr, $vr:expr, $pl:expr, $pr:expr, $ql:expr, $qr:expr) => {{
                 let (max, time, flag) = ($max, $time, $flag);
                 let y1 = simd.sub_f64s($ul, $ur);
                 let up = simd.greater_than_f64s(y1, *max);
                 *max = simd.select_f64s(up, y1, *max);
                 *time = simd.select_f64s(up, nowv, *time);
+                let (r0, r1) = (simd.sub_f64s($pl, $pr), simd.sub_f64s($vl, $vr));
                 let turn = simd.and_m64s(
-                    simd.greater_than_f64s(simd.sub_f64s($pl, $pr), zero),
-                    simd.less_than_f64s(simd.sub_f64s($vl, $vr), zero),
+                    simd.greater_than_f64s(r0, zero),
+                    simd.less_than_f64s(r1, zero),
                 );
+                // Or a double turn (defect 19): a maximum inside while the rate has one sign
+                // at both ends (rare to pass the necessary condition).
+                let y0 = simd.sub_f64s($ql, $qr);
+                let may = two_turns.may(simd, y0, r0, y1, r1);
+                let turn = if any(simd, may) {
+                    simd.or_m64s(
+                        turn,
+                        simd.and_m64s(may, two_turns.test(simd, y0, r0, y1, r1)),
+                    )
+                } else {
+                    turn
+                };
                 *flag = simd.select_f64s(turn, one, zero);
                 tv = simd.or_m64s(tv, turn);
                 rv = simd.or_m64s(rv, up);
@@ -637,6 +667,7 @@ impl pulp::WithSimd for OverlapPass<'_, '_> {
             let (ul, ur) = (&u[i0..i0 + n], &u[j0..j0 + n]);
             let (vl, vr) = (&ud[i0..i0 + n], &ud[j0..j0 + n]);
             let (pl, pr) = (&udp[i0..i0 + n], &udp[j0..j0 + n]);
+            let (ql, qr) = (&up[i0..i0 + n], &up[j0..j0 + n]);
             let (max, mt) = S::as_mut_simd_f64s(&mut ov.max[k0..k0 + n]);
             let (time, tt) = S::as_mut_simd_f64s(&mut ov.time[k0..k0 + n]);
             let (flag, ft) = S::as_mut_simd_f64s(&mut st.overlap_turn[k0..k0 + n]);
@@ -646,7 +677,9 @@ impl pulp::WithSimd for OverlapPass<'_, '_> {
             let (vrv, vrt) = S::as_simd_f64s(vr);
             let (plv, plt) = S::as_simd_f64s(pl);
             let (prv, prt) = S::as_simd_f64s(pr);
-            for ((((((((max, time), flag), ul), ur), vl), vr), pl), pr) in max
+            let (qlv, qlt) = S::as_simd_f64s(ql);
+            let (qrv, qrt) = S::as_simd_f64s(qr);
+            for ((((((((((max, time), flag), ul), ur), vl), vr), pl), pr), ql), qr) in max
                 .iter_mut()
                 .zip(time.iter_mut())
                 .zip(flag.iter_mut())
@@ -656,8 +689,10 @@ impl pulp::WithSimd for OverlapPass<'_, '_> {
                 .zip(vrv)
                 .zip(plv)
                 .zip(prv)
+                .zip(qlv)
+                .zip(qrv)
             {
-                pass!(max, time, flag, *ul, *ur, *vl, *vr, *pl, *pr);
+                pass!(max, time, flag, *ul, *ur, *vl, *vr, *pl, *pr, *ql, *qr);
             }
             if !mt.is_empty() && n >= lanes {
                 // The last `lanes` pairs as one more vector, overlapping the previous one:
@@ -669,6 +704,7 @@ impl pulp::WithSimd for OverlapPass<'_, '_> {
                 let (time, _) = S::as_mut_simd_f64s(&mut ov.time[k0 + o..k0 + n]);
                 let (flag, _) = S::as_mut_simd_f64s(&mut st.overlap_turn[k0 + o..k0 + n]);
                 let (ul, ur, vl, vr, pl, pr) = (v(ul), v(ur), v(vl), v(vr), v(pl), v(pr));
+                let (ql, qr) = (v(ql), v(qr));
                 pass!(
                     &mut max[0],
                     &mut time[0],
@@ -678,7 +714,9 @@ impl pulp::WithSimd for OverlapPass<'_, '_> {
                     vl,
                     vr,
                     pl,
-                    pr
+                    pr,
+                    ql,
+                    qr
                 );
             } else {
                 for t in 0..mt.len() {
@@ -686,7 +724,10 @@ impl pulp::WithSimd for OverlapPass<'_, '_> {
                     let up = y1 > mt[t];
                     mt[t] = if up { y1 } else { mt[t] };
                     tt[t] = if up { now } else { tt[t] };
-                    let turn = (plt[t] - prt[t] > 0.0) & (vlt[t] - vrt[t] < 0.0);
+                    let (r0, r1) = (plt[t] - prt[t], vlt[t] - vrt[t]);
+                    // (The vectors' decision, the same operations.)
+                    let turn =
+                        ((r0 > 0.0) & (r1 < 0.0)) || two_turns.scalar(qlt[t] - qrt[t], r0, y1, r1);
                     ft[t] = if turn { 1.0 } else { 0.0 };
                     turns |= turn;
                     raised |= up;
@@ -796,56 +837,8 @@ fn sample<S: pulp::Simd>(
     let (zero, one) = (simd.splat_f64s(0.0), simd.splat_f64s(1.0));
     let mut rv = simd.less_than_f64s(one, zero);
     // Whether the cubic Hermite interpolant of a quantity over the interval turns twice
-    // inside it while its rate has one sign at both ends: `peaks::turns_twice`, the same
-    // operations (m0 c3 > 0, m0 c2 < 0, |c2| < 3|c3| and c2² > 3 m0 c3).
-    let (two, three, lenv) = (
-        simd.splat_f64s(2.0),
-        simd.splat_f64s(3.0),
-        simd.splat_f64s(s.len),
-    );
-    let (half, three_halves) = (simd.splat_f64s(0.5), simd.splat_f64s(1.5));
-    // (0 for an interval of length 0, which has no interior: `double_turn` is then false,
-    // and the caller ignores the flags of such a sample anyway.)
-    let inv_len_s = if s.len > 0.0 { 1.0 / s.len } else { 0.0 };
-    let inv_len = simd.splat_f64s(inv_len_s);
-    // A necessary condition of `double_turn`, cheaper: `peaks::may_turn_twice`, the same
-    // operations.
-    macro_rules! may_turn_twice {
-        ($y0:expr, $y1:expr, $r0:expr, $r1:expr) => {{
-            let dd = simd.sub_f64s(
-                simd.mul_f64s(half, simd.add_f64s($r0, $r1)),
-                simd.mul_f64s(simd.sub_f64s($y1, $y0), inv_len),
-            );
-            simd.and_m64s(
-                simd.less_than_f64s(zero, simd.mul_f64s(dd, $r0)),
-                simd.less_than_f64s(
-                    simd.min_f64s(simd.abs_f64s($r0), simd.abs_f64s($r1)),
-                    simd.mul_f64s(three_halves, simd.abs_f64s(dd)),
-                ),
-            )
-        }};
-    }
-    macro_rules! double_turn {
-        ($y0:expr, $y1:expr, $r0:expr, $r1:expr) => {{
-            let dy = simd.sub_f64s($y1, $y0);
-            let (m0, m1) = (simd.mul_f64s($r0, lenv), simd.mul_f64s($r1, lenv));
-            let c2 = simd.sub_f64s(
-                simd.sub_f64s(simd.mul_f64s(three, dy), simd.mul_f64s(two, m0)),
-                m1,
-            );
-            let c3 = simd.sub_f64s(simd.add_f64s(m0, m1), simd.mul_f64s(two, dy));
-            let m0c3 = simd.mul_f64s(m0, c3);
-            let a = simd.and_m64s(
-                simd.less_than_f64s(zero, m0c3),
-                simd.less_than_f64s(simd.mul_f64s(m0, c2), zero),
-            );
-            let b = simd.and_m64s(
-                simd.less_than_f64s(simd.abs_f64s(c2), simd.mul_f64s(three, simd.abs_f64s(c3))),
-                simd.less_than_f64s(simd.mul_f64s(three, m0c3), simd.mul_f64s(c2, c2)),
-            );
-            simd.and_m64s(a, b)
-        }};
-    }
+    // inside it while its rate has one sign at both ends ([`DoubleTurn`]).
+    let two_turns = DoubleTurn::new(simd, s.len);
     // Vector i of the floors: its peaks, and its turn bits (weights `wd`, `ws`).
     // (A macro, not a closure: closures do not inherit the instruction set.)
     macro_rules! step {
@@ -868,11 +861,11 @@ fn sample<S: pulp::Simd>(
             // The double-turn test (rare to pass its necessary condition: only for vectors
             // with a lane that does).
             let y0s = simd.mul_f64s(k[i], simd.sub_f64s(u0[i], ubelow[i]));
-            let may_d = may_turn_twice!(u0[i], u[i], udp[i], ud[i]);
-            let may_s = may_turn_twice!(y0s, y1s, r0, r1);
+            let may_d = two_turns.may(simd, u0[i], udp[i], u[i], ud[i]);
+            let may_s = two_turns.may(simd, y0s, r0, y1s, r1);
             let (d_turn, s_turn) = if any(simd, simd.or_m64s(may_d, may_s)) {
-                let d_two = simd.and_m64s(may_d, double_turn!(u0[i], u[i], udp[i], ud[i]));
-                let s_two = simd.and_m64s(may_s, double_turn!(y0s, y1s, r0, r1));
+                let d_two = simd.and_m64s(may_d, two_turns.test(simd, u0[i], udp[i], u[i], ud[i]));
+                let s_two = simd.and_m64s(may_s, two_turns.test(simd, y0s, r0, y1s, r1));
                 (simd.or_m64s(d_turn, d_two), simd.or_m64s(s_turn, s_two))
             } else {
                 (d_turn, s_turn)
@@ -936,12 +929,8 @@ fn sample<S: pulp::Simd>(
             kt[i] * (udt[i] - vbelowt[i]),
         );
         // (The vectors' decision: the necessary condition, then the test.)
-        let two = |y0: f64, r0: f64, y1: f64, r1: f64| {
-            peaks::may_turn_twice(y0, r0, y1, r1, inv_len_s)
-                && peaks::turns_twice(y0, r0, y1, r1, s.len)
-        };
-        let d_two = two(u0t[i], udpt[i], ut[i], udt[i]);
-        let s_two = two(
+        let d_two = two_turns.scalar(u0t[i], udpt[i], ut[i], udt[i]);
+        let s_two = two_turns.scalar(
             kt[i] * (u0t[i] - ubelowt[i]),
             r0,
             kt[i] * (ut[i] - belowt[i]),
@@ -955,6 +944,93 @@ fn sample<S: pulp::Simd>(
         any_turn |= w;
     }
     (raised | any(simd, rv), any_turn != 0)
+}
+
+/// The double-turn flag of a quantity y over an interval of length `len` (defect 18): its
+/// rate has one sign at both ends while the cubic Hermite interpolant of (y, ẏ) at the ends
+/// turns twice inside ([`peaks::turns_twice`]), tested only where its cheaper necessary
+/// condition holds ([`peaks::may_turn_twice`]). In vectors of the sample's instruction set
+/// ([`DoubleTurn::may`], [`DoubleTurn::test`]) and for the scalar tails
+/// ([`DoubleTurn::scalar`]), by the same operations, so the vectors and the tails decide
+/// alike on every instruction set. Used by the building samples ([`sample`]) and by the
+/// overlap audit's first pass ([`OverlapPass`]).
+struct DoubleTurn<S: pulp::Simd> {
+    len: f64,
+    /// 1/len (0 for an interval of length 0, which has no interior: the test is then false,
+    /// and the callers ignore such a sample's flags anyway).
+    inv_len: f64,
+    zero: S::f64s,
+    half: S::f64s,
+    three_halves: S::f64s,
+    two: S::f64s,
+    three: S::f64s,
+    lenv: S::f64s,
+    inv_lenv: S::f64s,
+}
+
+impl<S: pulp::Simd> DoubleTurn<S> {
+    #[inline(always)]
+    fn new(simd: S, len: f64) -> Self {
+        let inv_len = if len > 0.0 { 1.0 / len } else { 0.0 };
+        DoubleTurn {
+            len,
+            inv_len,
+            zero: simd.splat_f64s(0.0),
+            half: simd.splat_f64s(0.5),
+            three_halves: simd.splat_f64s(1.5),
+            two: simd.splat_f64s(2.0),
+            three: simd.splat_f64s(3.0),
+            lenv: simd.splat_f64s(len),
+            inv_lenv: simd.splat_f64s(inv_len),
+        }
+    }
+
+    /// [`peaks::may_turn_twice`], lane by lane, the same operations.
+    #[inline(always)]
+    fn may(&self, simd: S, y0: S::f64s, r0: S::f64s, y1: S::f64s, r1: S::f64s) -> S::m64s {
+        let dd = simd.sub_f64s(
+            simd.mul_f64s(self.half, simd.add_f64s(r0, r1)),
+            simd.mul_f64s(simd.sub_f64s(y1, y0), self.inv_lenv),
+        );
+        simd.and_m64s(
+            simd.less_than_f64s(self.zero, simd.mul_f64s(dd, r0)),
+            simd.less_than_f64s(
+                simd.min_f64s(simd.abs_f64s(r0), simd.abs_f64s(r1)),
+                simd.mul_f64s(self.three_halves, simd.abs_f64s(dd)),
+            ),
+        )
+    }
+
+    /// [`peaks::turns_twice`], lane by lane, the same operations (m0 c3 > 0, m0 c2 < 0,
+    /// |c2| < 3|c3| and c2² > 3 m0 c3).
+    #[inline(always)]
+    fn test(&self, simd: S, y0: S::f64s, r0: S::f64s, y1: S::f64s, r1: S::f64s) -> S::m64s {
+        let (two, three, zero) = (self.two, self.three, self.zero);
+        let dy = simd.sub_f64s(y1, y0);
+        let (m0, m1) = (simd.mul_f64s(r0, self.lenv), simd.mul_f64s(r1, self.lenv));
+        let c2 = simd.sub_f64s(
+            simd.sub_f64s(simd.mul_f64s(three, dy), simd.mul_f64s(two, m0)),
+            m1,
+        );
+        let c3 = simd.sub_f64s(simd.add_f64s(m0, m1), simd.mul_f64s(two, dy));
+        let m0c3 = simd.mul_f64s(m0, c3);
+        let a = simd.and_m64s(
+            simd.less_than_f64s(zero, m0c3),
+            simd.less_than_f64s(simd.mul_f64s(m0, c2), zero),
+        );
+        let b = simd.and_m64s(
+            simd.less_than_f64s(simd.abs_f64s(c2), simd.mul_f64s(three, simd.abs_f64s(c3))),
+            simd.less_than_f64s(simd.mul_f64s(three, m0c3), simd.mul_f64s(c2, c2)),
+        );
+        simd.and_m64s(a, b)
+    }
+
+    /// The vectors' decision for one scalar quantity: the necessary condition, then the test.
+    #[inline(always)]
+    fn scalar(&self, y0: f64, r0: f64, y1: f64, r1: f64) -> bool {
+        peaks::may_turn_twice(y0, r0, y1, r1, self.inv_len)
+            && peaks::turns_twice(y0, r0, y1, r1, self.len)
+    }
 }
 
 /// Whether some lane of the mask is set.

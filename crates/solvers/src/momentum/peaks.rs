@@ -41,14 +41,6 @@ pub struct Interval {
 
 pub use crate::response::hermite_extremum;
 
-/// The estimate of an interior extremum of a quantity whose rate has one sign at both ends
-/// of the interval (ẏ0 ẏ1 ≥ 0), flagged because it may turn twice inside near its peak
-/// (`observe::sample`): from the cubic Hermite interpolant H of (y0, ẏ0, y1, ẏ1) over
-/// `len`, whose derivative is then either of one sign on [0, 1] or has two roots there.
-/// With two, the one of larger |H|, as (θ, H(θ)) (θ ∈ (0, 1), the fraction of `len`);
-/// with none (H monotone, the turns if any hidden in its error), the point where |H′| is
-/// least and the end value of larger |y|, a start for Newton's method that cannot raise
-/// the peak by itself.
 /// A necessary condition of [`turns_twice`], cheaper, in rates (`inv_len` = 1/len): with
 /// D = (ẏ0 + ẏ1)/2 − (y1 − y0)/len, H′(θ)/len = (1 − θ) ẏ0 + θ ẏ1 − 6Dθ(1 − θ), so a dip of
 /// H′ to the other sign than its ends needs D of their sign and 1.5|D| > min(|ẏ0|, |ẏ1|)
@@ -75,7 +67,41 @@ pub fn turns_twice(y0: f64, yd0: f64, y1: f64, yd1: f64, len: f64) -> bool {
     0.0 < m0c3 && m0 * c2 < 0.0 && c2.abs() < 3.0 * c3.abs() && 3.0 * m0c3 < c2 * c2
 }
 
+/// The estimate of an interior extremum of a quantity whose rate has one sign at both ends
+/// of the interval (ẏ0 ẏ1 ≥ 0), flagged because it may turn twice inside near its peak
+/// (`observe::sample`): from the cubic Hermite interpolant H of (y0, ẏ0, y1, ẏ1) over
+/// `len`, whose derivative is then either of one sign on [0, 1] or has two roots there.
+/// With two, the one of larger |H|, as (θ, H(θ)) (θ ∈ (0, 1), the fraction of `len`);
+/// with none (H monotone, the turns if any hidden in its error), the point where |H′| is
+/// least and the end value of larger |y|, a start for Newton's method that cannot raise
+/// the peak by itself.
 pub fn double_turn_estimate(y0: f64, yd0: f64, y1: f64, yd1: f64, len: f64) -> (f64, f64) {
+    let end = if y0.abs() >= y1.abs() { y0 } else { y1 };
+    double_turn_pick(y0, yd0, y1, yd1, len, |h, best| h.abs() > best.abs(), end)
+}
+
+/// As [`double_turn_estimate`] for a signed maximum (the overlap audit's u_left − u_right,
+/// flagged in `observe::OverlapPass`): with two critical points inside, the one of larger
+/// H, which is the cubic's local maximum (H falls from its local maximum to its local
+/// minimum between them, or rises from the minimum to the maximum); with none, the point
+/// where |H′| is least and the larger end value, which cannot raise the maximum by itself.
+pub fn double_turn_maximum(y0: f64, yd0: f64, y1: f64, yd1: f64, len: f64) -> (f64, f64) {
+    double_turn_pick(y0, yd0, y1, yd1, len, |h, best| h > best, y0.max(y1))
+}
+
+/// The critical point θ ∈ (0, 1) of the cubic Hermite interpolant H of (y0, ẏ0, y1, ẏ1) over
+/// `len` whose value `better` prefers (`better(h, best)`: h replaces best), as (θ, H(θ));
+/// with none, (θ where |H′| is least, `end`).
+#[inline(always)]
+fn double_turn_pick(
+    y0: f64,
+    yd0: f64,
+    y1: f64,
+    yd1: f64,
+    len: f64,
+    better: impl Fn(f64, f64) -> bool,
+    end: f64,
+) -> (f64, f64) {
     let [c1, c2, c3] = crate::response::hermite_cubic(y0, yd0, y1, yd1, len);
     let h = |t: f64| y0 + t * (c1 + t * (c2 + t * c3));
     // H′(θ) = a θ² + b θ + c.
@@ -85,7 +111,7 @@ pub fn double_turn_estimate(y0: f64, yd0: f64, y1: f64, yd1: f64, len: f64) -> (
     if a != 0.0 && disc > 0.0 {
         let q = -0.5 * (b + b.signum() * disc.sqrt());
         for t in [q / a, if q != 0.0 { c / q } else { f64::NAN }] {
-            if t > 0.0 && t < 1.0 && best.is_none_or(|(_, v)| h(t).abs() > v.abs()) {
+            if t > 0.0 && t < 1.0 && best.is_none_or(|(_, v)| better(h(t), v)) {
                 best = Some((t, h(t)));
             }
         }
@@ -96,7 +122,7 @@ pub fn double_turn_estimate(y0: f64, yd0: f64, y1: f64, yd1: f64, len: f64) -> (
         } else {
             0.5
         };
-        (tv, if y0.abs() >= y1.abs() { y0 } else { y1 })
+        (tv, end)
     })
 }
 
@@ -483,6 +509,28 @@ mod tests {
         // Monotone: y = θ³ + θ (ẏ = 1 at 0, 4 at 1).
         let (th, h) = double_turn_estimate(0.0, 1.0, 2.0, 4.0, 1.0);
         assert_eq!((th, h), (0.0, 2.0));
+    }
+
+    /// The signed maximum is the cubic's local maximum, not the critical point of larger
+    /// |H|: y = θ³ − 1.2 θ² + 0.4 θ − 0.05 has its maximum −0.0093 at θ = (1.2 − √0.24)/3 and
+    /// its minimum −0.0267 at (1.2 + √0.24)/3 (larger in size, the estimate's pick); a
+    /// monotone cubic gives the larger end value.
+    #[test]
+    fn double_turn_maximum_is_the_cubics_local_maximum() {
+        let y = |t: f64| t * t * t - 1.2 * t * t + 0.4 * t - 0.05;
+        let (t1, t2) = ((1.2 - 0.24f64.sqrt()) / 3.0, (1.2 + 0.24f64.sqrt()) / 3.0);
+        let (th, h) = double_turn_maximum(y(0.0), 0.4, y(1.0), 1.0, 1.0);
+        assert!((th - t1).abs() < 1e-12, "{th} vs {t1}");
+        assert!((h - y(t1)).abs() < 1e-14 && h < 0.0, "{h}");
+        assert!((double_turn_estimate(y(0.0), 0.4, y(1.0), 1.0, 1.0).0 - t2).abs() < 1e-12);
+        // Falling at both ends (ẏ = −0.4 and −1.0): the mirror image, the same maximum.
+        let (th, h) = double_turn_maximum(-y(0.0), -0.4, -y(1.0), -1.0, 1.0);
+        assert!(
+            (th - t2).abs() < 1e-12 && (h + y(t2)).abs() < 1e-14,
+            "{th} {h}"
+        );
+        // Monotone: y = θ³ + θ − 3 (ẏ = 1 at 0, 4 at 1): the larger end, −1.
+        assert_eq!(double_turn_maximum(-3.0, 1.0, -1.0, 4.0, 1.0), (0.0, -1.0));
     }
 
     /// Stored intervals come back as stored, across the blocks of `Deferred::state` (a
