@@ -179,6 +179,21 @@
 //!   rate turned twice inside one sample interval (`double_turns_at_a_peak_are_found`); 9279
 //!   (energy audits, no impact: 7.6e-11 of its input) was the check's scale, now with the
 //!   static energy ([`momentum_balance`]). docs/solvers.md, defects 16–18.
+//! - Held out 10000 … 13999, first swept on 2026-11-29 at defect 19's code (`POUND_RANDOM_FIRST=10000
+//!   POUND_RANDOM_SEEDS=4000`): energy audits, the gap element's integrators, the history and the
+//!   contact audit 0 failing; refinement 4, momentum against impulse 1, none a defect found.
+//!   10245 (refined 2×: 31 against 32 impacts) and 11471 (refined 5×: 89 against 86; against
+//!   the impulse method 89 against 90) are chaotic rattles at c_r = 1: the refined record's
+//!   run differs from the record's at the first impact by round-off (2.2e-16 s, 1.7e-15 of the
+//!   approach speed), and the difference grows impact by impact (10245: 2.5e-11 s at impact 7,
+//!   6.5e-9 s at 14, 1.3e-6 s at 22; 11471: 8.6e-11 s at 28, 6.3e-6 s at 56) until an impact
+//!   comes or goes. The records refined 5×, 10× and 20× leave 10245's impact 7 within
+//!   2.3e-11 … 3.5e-11 s of the record's and 3× on it, converging to no other value: round-off
+//!   amplified, not a grid error. The test's own round-off probe (the record scaled by
+//!   1 + 4ε) happens to keep their impact counts, so they are not skipped as chaotic. 13601 and
+//!   13871 storm on the record refined 5× (13601 with 5 held phases, 240, 189 and 195 impacts
+//!   on the record and refined 2× and 3×; 13871 with 80 impacts in 50 ms on its record, the
+//!   guard's limit 100, storming at 3× too): sequences near the guard's limit, as 7478 was.
 //! - Before defect 15, the thirteen held seeds above, at a floor of about 1e-8 that the held
 //!   tolerance did not control (541: 9.7e-9 at 1e-8 and at 1e-10); before defect 12, 32
 //!   others (65, 75, 113, 145, 360, 402, 541, 715, 851 and 23 of 1000 … 3999); before linear
