@@ -523,7 +523,7 @@ mod tests {
         assert!((th - t1).abs() < 1e-12, "{th} vs {t1}");
         assert!((h - y(t1)).abs() < 1e-14 && h < 0.0, "{h}");
         assert!((double_turn_estimate(y(0.0), 0.4, y(1.0), 1.0, 1.0).0 - t2).abs() < 1e-12);
-        // Falling at both ends (ẏ = −0.4 and −1.0): the mirror image, the same maximum.
+        // Falling at both ends (ẏ = −0.4 and −1.0), −y: its maximum is at y's minimum.
         let (th, h) = double_turn_maximum(-y(0.0), -0.4, -y(1.0), -1.0, 1.0);
         assert!(
             (th - t2).abs() < 1e-12 && (h + y(t2)).abs() < 1e-14,
