@@ -629,16 +629,29 @@ mod tests {
         let shift = 1e-9;
         // a = 0.5, b = 0.8: δ(s) = s²(0.8 s − 0.5), zero at 0.625, minimum −0.065 at 5/12.
         for rate0 in [1e-17, -1e-17] {
-            let c = [0.0, rate0, -0.5, 0.8, 0.0];
-            for bounded in [true, false] {
-                let (r, search) = locate(c, bounded, shift);
-                let s = r.unwrap_or_else(|| panic!("missed ({rate0}, bounded {bounded})"));
-                assert!((s - 0.625).abs() < 1e-12, "{rate0} {bounded}: {s}");
-                assert_eq!(search.shift, 0.0, "re-armed");
-            }
+            assert_re_armed_at([0.0, rate0, -0.5, 0.8, 0.0], shift, 0.625);
         }
         // Dipping 0.065e-9 (a fifteenth of the band) and rising through the band: at δ = shift.
-        let c = [0.0, 1e-17, -0.5e-9, 0.8e-9 + 2.0 * shift, 0.0];
+        assert_found_at_band([0.0, 1e-17, -0.5e-9, 0.8e-9 + 2.0 * shift, 0.0], shift);
+    }
+
+    /// The search of `c` at `shift`, with and without bounds, re-arms the contact and finds
+    /// the closure at `exact` (the crossing of δ = 0).
+    fn assert_re_armed_at(c: [f64; 5], shift: f64, exact: f64) {
+        for bounded in [true, false] {
+            let (r, search) = locate(c, bounded, shift);
+            let s = r.unwrap_or_else(|| panic!("missed ({c:?}, bounded {bounded})"));
+            assert!(
+                (s - exact).abs() < 1e-12,
+                "{c:?}, bounded {bounded}: {s} vs {exact}"
+            );
+            assert_eq!(search.shift, 0.0, "re-armed");
+        }
+    }
+
+    /// The search of `c` at `shift` keeps the band (not re-armed) and finds the closure where
+    /// δ first reaches `shift`.
+    fn assert_found_at_band(c: [f64; 5], shift: f64) {
         let exact = first_reach(c, shift).unwrap();
         let (r, search) = locate(c, true, shift);
         assert!((r.unwrap() - exact).abs() < 1e-12, "{r:?} vs {exact}");
@@ -660,23 +673,10 @@ mod tests {
         // δ = −s + 6 s² − 4.9 s³: a minimum −0.045 at s = 0.094, zero at s* below, a maximum at
         // 0.72, δ(1) = 0.1 with δ̇(1) = −3.7.
         let c = [0.0, -1.0, 6.0, -4.9, 0.0];
-        let exact = (6.0 - (36.0f64 - 19.6).sqrt()) / 9.8;
-        for bounded in [true, false] {
-            let (r, search) = locate(c, bounded, shift);
-            let s = r.unwrap_or_else(|| panic!("missed (bounded {bounded})"));
-            assert!(
-                (s - exact).abs() < 1e-12,
-                "bounded {bounded}: {s} vs {exact}"
-            );
-            assert_eq!(search.shift, 0.0, "re-armed");
-        }
+        assert_re_armed_at(c, shift, (6.0 - (36.0f64 - 19.6).sqrt()) / 9.8);
         // The same rebound 1.5e-8 times smaller dips 0.68e-9, within the band: not re-armed,
         // its closure is at δ = shift.
-        let shallow = c.map(|x| x * 1.5e-8);
-        let late = first_reach(shallow, shift).unwrap();
-        let (r, search) = locate(shallow, true, shift);
-        assert!((r.unwrap() - late).abs() < 1e-12, "{r:?} vs {late}");
-        assert_eq!(search.shift, shift);
+        assert_found_at_band(c.map(|x| x * 1.5e-8), shift);
     }
 
     /// An armed contact below zero at both ends of the window whose δ̇ turns twice inside it,
