@@ -166,11 +166,13 @@
 //! (`the_held_comparison_has_no_band_floor` keeps the fourteen).
 //!
 //! What the sweeps still fail, and what they failed before (the default seeds pass). Over
-//! 0 … 3999 every invariant passes; over the held-out 4000 … 9999, momentum against impulse
-//! fails on 6471 and 7228, the energy audits on 7225, refinement on 4601 and 7225 (checked
-//! with every test of this file over seeds 0 … 9999 in one run on 2026-11-29,
-//! `POUND_RANDOM_SEEDS=10000`, 1 756 s on two cores beside other work: those five failures
-//! and no other; over 0 … 7999 on 2026-11-28, 1 065 s, the same five):
+//! 0 … 3999 every invariant passes; over the held-out 4000 … 17999 only event storms fail: the
+//! energy audits on 7225 and 14904, refinement on 4601, 7225, 13601, 13871, 14560 and 14904
+//! (refinement and momentum against impulse swept over 0 … 17999 at the three round-off
+//! probes, below; every other test over 0 … 9999 in one run on 2026-11-29,
+//! `POUND_RANDOM_SEEDS=10000`, 1 756 s on two cores beside other work, and over 10000 … 17999
+//! in the two first sweeps below). Until the probes were widened, momentum against impulse
+//! failed on 6471 and 7228 as well:
 //! - Held out 8000 … 9999, first swept on 2026-11-29: four failures, all mended. 9906
 //!   (refinement: 87 impacts on the record, 86 on it refined 2×) had two defects of the closure
 //!   search, a rattle's re-closure found at the band and a re-closure with δ̇ < 0 at both ends
@@ -190,10 +192,27 @@
 //!   comes or goes. The records refined 5×, 10× and 20× leave 10245's impact 7 within
 //!   2.3e-11 … 3.5e-11 s of the record's and 3× on it, converging to no other value: round-off
 //!   amplified, not a grid error. The test's own round-off probe (the record scaled by
-//!   1 + 4ε) happens to keep their impact counts, so they are not skipped as chaotic. 13601 and
+//!   1 + 4ε) happened to keep their impact counts, so they were not skipped as chaotic (they are
+//!   at the three probes, [`ROUND_OFF_PROBES`]). 13601 and
 //!   13871 storm on the record refined 5× (13601 with 5 held phases, 240, 189 and 195 impacts
 //!   on the record and refined 2× and 3×; 13871 with 80 impacts in 50 ms on its record, the
 //!   guard's limit 100, storming at 3× too): sequences near the guard's limit, as 7478 was.
+//! - Held out 14000 … 17999, first swept on 2026-11-29 at commit 13cef64 (every test, one run,
+//!   896 s): the gap element's integrators, the history and the contact audit 0 failing; energy
+//!   audits 1, refinement 3, momentum against impulse 3, none a defect. 14904 storms on its
+//!   record (its middle stick's undamped top floor held against one neighbour, rattling against
+//!   the other at c_r = 1 every 0.27 ms at 2.1e-3 m/s; 297 impacts with the guard raised, the
+//!   impulse method 247), failing the energy audits and refinement; 14560 storms on its record
+//!   refined 3×. 16436 (refined 5×: peaks 2.3e-10 apart; 170 impacts at c_r = 1, whose times
+//!   drift apart from impact 40 on, by 1.8e-7 … 1.5e-6 s at the last over refinements 2× … 32×
+//!   in no order) and, against the impulse method, 14587, 17329 and 17441 (impact counts that
+//!   do not settle with the impulse method's tolerance; 14587 a near-graze whose instant moves
+//!   by up to 2.5e-3 s under round-off, its count kept) are chaotic: the probe 1 + 4ε missed
+//!   them (16436's peaks moved 2.9e-13 by it, 1.1e-10 … 1.8e-10 by 1 − 2ε, 1 + ε, 1 + 16ε,
+//!   1 + 64ε). Hence the three probes and the moved-impact threshold ([`ROUND_OFF_PROBES`],
+//!   [`MOVED_IMPACT`]); the comparison with the impulse method skips a chaotic scene only where
+//!   its retries at tighter tolerances cannot close it (1490 and 6016, chaotic by the probes,
+//!   are still checked and pass). docs/solvers.md, "Held out 14000 … 17999".
 //! - Before defect 15, the thirteen held seeds above, at a floor of about 1e-8 that the held
 //!   tolerance did not control (541: 9.7e-9 at 1e-8 and at 1e-10); before defect 12, 32
 //!   others (65, 75, 113, 145, 360, 402, 541, 715, 851 and 23 of 1000 … 3999); before linear
@@ -210,7 +229,8 @@
 //!   still changes at 1e-15 (6471: 22, 25, 25, 25, 25, 26, 25 impacts at 1e-9 … 1e-15 against the
 //!   momentum method's 26; 7228: 69 … 74 against 74, peaks 1.2e-3 apart at 1e-15) and a round-off
 //!   change of the record moves the momentum method's peaks by 3.2e-3 and 3.0e-4 with the same
-//!   impacts: chaotic rattles that this comparison cannot close; 7225 (an event storm where the
+//!   impacts: chaotic rattles that this comparison cannot close (skipped as chaotic at the three
+//!   probes); 7225 (an event storm where the
 //!   impulse method at its fine tolerance runs: an elastic rattle against a wall at the guard's
 //!   2000 impacts/s, where the impulse method at its default tolerance 1e-8 storms too, at 1.826
 //!   s against the momentum method's 1.839 s; with the guard at 1e5/s both run, with 506 and 589
@@ -688,20 +708,44 @@ fn impulse_matching(scene: &Scene, reference: &RunOutput, tol: f64) -> Option<Ru
         .filter(|i| impact_diff(reference, i).is_ok())
 }
 
-/// The momentum method's response to a round-off-sized change of the scene (the record
-/// scaled by 1 + 2⁻⁵⁰): its largest relative peak change and whether the impacts stay the
-/// same (count and contacts). Pounding can be chaotic: a long sequence of impacts amplifies
-/// any difference, round-off included, and this measures by how much on the scene at hand.
+/// The round-off-sized changes of [`round_off_response`]: the record scaled by 1 + kε for
+/// each k. One probe (k = 4, the only one until held-out seeds 14000 … 17999 were swept) can
+/// be an unlucky draw: on 16436 it moved the peaks by 2.9e-13 where k = −2, 1, 16 and 64
+/// moved them by 1.1e-10 … 1.8e-10; on 11471 it kept the 89 impacts (peaks 1.8e-3) where
+/// k = −8, 2 and 16 gave 92, 91 and 87.
+const ROUND_OFF_PROBES: [f64; 3] = [4.0, -2.0, 16.0];
+
+/// An impact that a round-off-sized change moves by more than this, s, counts as moved (the
+/// alignment threshold of [`impact_diff`]'s first difference): an ill-conditioned sequence,
+/// such as a near-graze whose instant moves by milliseconds (held-out 14587: 111 impacts under
+/// every probe, one of them moved by up to 2.5e-3 s; the impulse method finds 110, 113, 111,
+/// 113 and 113 at 1e-11 … 1e-15), or a rattle that amplifies round-off impact by impact
+/// (17441: 3.3e-4 s).
+const MOVED_IMPACT: f64 = 1e-6;
+
+/// The momentum method's response to round-off-sized changes of the scene
+/// ([`ROUND_OFF_PROBES`]): its largest relative peak change over the probes, and whether
+/// every probe leaves the impacts where they were (the same count and contacts, no instant
+/// moved beyond [`MOVED_IMPACT`]). Pounding can be chaotic: a long sequence of impacts
+/// amplifies any difference, round-off included, and this measures by how much on the scene
+/// at hand.
 fn round_off_response(scene: &Scene, mom: &RunOutput) -> (f64, bool) {
-    let mut s = scene.clone();
-    let g = s.ground.as_mut().unwrap();
-    for a in &mut g.accel {
-        *a *= 1.0 + 4.0 * f64::EPSILON;
+    let (mut pert, mut same) = (0.0_f64, true);
+    for k in ROUND_OFF_PROBES {
+        let mut s = scene.clone();
+        let g = s.ground.as_mut().unwrap();
+        for a in &mut g.accel {
+            *a *= 1.0 + k * f64::EPSILON;
+        }
+        match solvers::run(&s, Method::Momentum, None) {
+            Ok(o) => {
+                pert = pert.max(peak_diff(mom, &o).0);
+                same &= impact_diff(mom, &o).is_ok_and(|(dt, _)| dt <= MOVED_IMPACT);
+            }
+            Err(_) => return (f64::INFINITY, false),
+        }
     }
-    match solvers::run(&s, Method::Momentum, None) {
-        Ok(o) => (peak_diff(mom, &o).0, impact_diff(mom, &o).is_ok()),
-        Err(_) => (f64::INFINITY, false),
-    }
+    (pert, same)
 }
 
 fn verbose() -> bool {
@@ -814,12 +858,15 @@ fn impulse_verdict(c: &Case) -> Verdict {
     if !grid_dependent(&mom) && !grid_dependent(&imp) {
         let (pert, same) = round_off_response(&c.scene, &mom);
         let impacts = impact_diff(&mom, &imp);
-        if impacts.is_err() && !same {
-            return Verdict::Skip("chaotic: a round-off change moves the impacts".into());
-        }
+        // Different impacts where a round-off change moves the momentum method's: chaotic.
+        // Skipped only where the comparison below cannot close (seeds 1490 and 6016 are
+        // chaotic by the probes and still converge to the momentum method's impacts).
+        let chaotic = impacts.is_err() && !same;
+        let skip = || Verdict::Skip("chaotic: a round-off change moves the impacts".into());
         let (d, at) = peak_diff(&mom, &imp);
         let coarse = match impulse_at(&c.scene, TOL_COARSE) {
             Ok(o) => peak_diff(&mom, &o).0,
+            Err(_) if chaotic => return skip(),
             Err(e) => return Verdict::Fail(format!("impulse at tol {TOL_COARSE:e}: {e}")),
         };
         let o = overlap_diff(&mom, &imp);
@@ -861,6 +908,9 @@ fn impulse_verdict(c: &Case) -> Verdict {
                     e <= IMPULSE_FLOOR || e <= d / 100.0
                 });
             if !three_decades {
+                if chaotic {
+                    return skip();
+                }
                 let what = match impacts {
                     Err(e) => format!("at tol {TOL_FINE:e}: {e}"),
                     Ok(_) => format!(
@@ -918,11 +968,12 @@ fn held_verdict(c: &Case, mom: &RunOutput, imp: &RunOutput) -> Verdict {
     // 1e-13, which finds them at every held tolerance), and it is then the reference.
     let mut retried: Option<RunOutput> = None;
     if let Err(e) = impact_diff(&mt, imp) {
-        if !round_off_response(&c.scene, &mt).1 {
-            return Verdict::Skip("held, chaotic: a round-off change moves the impacts".into());
-        }
         match impulse_matching(&c.scene, &mt, TOL_FINE / 100.0) {
             Some(i) => retried = Some(i),
+            // Skipped as chaotic only where the retry cannot close it (as the free scenes).
+            None if !round_off_response(&c.scene, &mt).1 => {
+                return Verdict::Skip("held, chaotic: a round-off change moves the impacts".into())
+            }
             None => {
                 return Verdict::Fail(format!(
                     "held contacts, held_tolerance {HELD_TIGHT:e}: {e} (at the impulse \
