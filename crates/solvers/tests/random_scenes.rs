@@ -202,7 +202,7 @@
 //!   audits 1, refinement 3, momentum against impulse 3, none a defect. 14904 storms on its
 //!   record (its middle stick's undamped top floor held against one neighbour, rattling against
 //!   the other at c_r = 1 every 0.27 ms at 2.1e-3 m/s; 297 impacts with the guard raised, the
-//!   impulse method 247), failing the energy audits and refinement; 14560 storms on its record
+//!   impulse method 247 at its default tolerance), failing the energy audits and refinement; 14560 storms on its record
 //!   refined 3×. 16436 (refined 5×: peaks 2.3e-10 apart; 170 impacts at c_r = 1, whose times
 //!   drift apart from impact 40 on, by 1.8e-7 … 1.5e-6 s at the last over refinements 2× … 32×
 //!   in no order) and, against the impulse method, 14587, 17329 and 17441 (impact counts that
@@ -212,7 +212,10 @@
 //!   1 + 64ε). Hence the three probes and the moved-impact threshold ([`ROUND_OFF_PROBES`],
 //!   [`MOVED_IMPACT`]); the comparison with the impulse method skips a chaotic scene only where
 //!   its retries at tighter tolerances cannot close it (1490 and 6016, chaotic by the probes,
-//!   are still checked and pass). docs/solvers.md, "Held out 14000 … 17999".
+//!   are still checked and pass). The peak allowance of both comparisons, 100 times the
+//!   response to round-off, is taken over the three probes, so it widened on chaotic scenes
+//!   (16436 passes by it). `chaotic_scenes_are_seen_by_the_round_off_probes` keeps the eight
+//!   seeds; docs/solvers.md, "Held out 14000 … 17999".
 //! - Before defect 15, the thirteen held seeds above, at a floor of about 1e-8 that the held
 //!   tolerance did not control (541: 9.7e-9 at 1e-8 and at 1e-10); before defect 12, 32
 //!   others (65, 75, 113, 145, 360, 402, 541, 715, 851 and 23 of 1000 … 3999); before linear
@@ -720,7 +723,7 @@ const ROUND_OFF_PROBES: [f64; 3] = [4.0, -2.0, 16.0];
 /// such as a near-graze whose instant moves by milliseconds (held-out 14587: 111 impacts under
 /// every probe, one of them moved by up to 2.5e-3 s; the impulse method finds 110, 113, 111,
 /// 113 and 113 at 1e-11 … 1e-15), or a rattle that amplifies round-off impact by impact
-/// (17441: 3.3e-4 s).
+/// (17441: by 7.6e-5 … 4.3e-4 s under the three probes).
 const MOVED_IMPACT: f64 = 1e-6;
 
 /// The momentum method's response to round-off-sized changes of the scene
@@ -1040,7 +1043,12 @@ const REFINED_PEAKS: f64 = 1e-10;
 /// the grid (e.g. a base-step split that is not exact).
 #[test]
 fn momentum_peaks_are_continuous_maxima() {
-    sweep("refined", |c| {
+    sweep("refined", refined_verdict);
+}
+
+/// Invariant 3 on one scene (the sweep's check): the record refined 2, 3 or 5 times by seed.
+fn refined_verdict(c: &Case) -> Verdict {
+    {
         let k = [2, 3, 5][(c.seed % 3) as usize];
         let (a, b) = match both_ran(
             solvers::run(&c.scene, Method::Momentum, None),
@@ -1084,7 +1092,42 @@ fn momentum_peaks_are_continuous_maxima() {
             ("impact velocities / approach", dv),
             ("overlaps / largest displacement", o),
         ])
-    });
+    }
+}
+
+/// The eight chaotic seeds that the one round-off probe (record × (1 + 4ε), read by its
+/// impact count) missed and that failed the sweeps of 4000 … 17999 (docs/solvers.md, "Held
+/// out 14000 … 17999"): at [`ROUND_OFF_PROBES`] and [`MOVED_IMPACT`] refinement skips 10245
+/// and 11471 as chaotic and passes 16436 (its peaks 2.3e-10 apart refined 5×, within 100
+/// times their response to the probes, 1.8e-10), and the comparison with the impulse method
+/// fails none of 6471, 7228, 11471, 14587, 17329 and 17441.
+#[test]
+fn chaotic_scenes_are_seen_by_the_round_off_probes() {
+    let show = |v: &Verdict| match v {
+        Verdict::Pass(_) => "passed".to_string(),
+        Verdict::Skip(why) => format!("skipped ({why})"),
+        Verdict::Fail(why) => format!("failed: {why}"),
+    };
+    for (seed, want_skip) in [(10245, true), (11471, true), (16436, false)] {
+        let c = draw(seed);
+        let v = refined_verdict(&c);
+        let ok = if want_skip {
+            matches!(v, Verdict::Skip(_))
+        } else {
+            matches!(v, Verdict::Pass(_))
+        };
+        assert!(ok, "seed {seed}, refinement: {}\n{}", show(&v), c.what);
+    }
+    for seed in [6471, 7228, 11471, 14587, 17329, 17441] {
+        let c = draw(seed);
+        let v = impulse_verdict(&c);
+        assert!(
+            !matches!(v, Verdict::Fail(_)),
+            "seed {seed}, against the impulse method: {}\n{}",
+            show(&v),
+            c.what
+        );
+    }
 }
 
 /// The momentum method's energy balance ([`momentum_balance`]): exact propagation and
