@@ -1047,7 +1047,8 @@ fn earliest_event(
         };
         let samples = kin_samples(dp, n, l, r, gap);
         let (mut d_a, mut dd_a) = samples[0];
-        let mut fr_a = if ends_on_force { force_rate(0.0) } else { 0.0 };
+        // dF/dt at θ_a where it was read (at every sample while closed).
+        let mut fr_a = ends_on_force.then(|| force_rate(0.0));
         let mut th_a = 0.0;
         let mut bracket: Option<(f64, f64)> = None;
         for (j, &(d_b, dd_b)) in samples.iter().enumerate().skip(1) {
@@ -1058,6 +1059,7 @@ fn earliest_event(
                 }
             }
             let g_b = law.event(d_b, dd_b);
+            let mut fr_b = None;
             if !closed {
                 if g_b > 0.0 {
                     bracket = Some((th_a, th_b));
@@ -1091,7 +1093,9 @@ fn earliest_event(
                     // 0): F rising at one sample and falling at the next has a maximum
                     // between them, a closure (F > 0 there, beyond its round-off, δ > 0)
                     // that ends again before the next sample.
-                    if force_rate(th_a) > 0.0 && force_rate(th_b) < 0.0 {
+                    let fa = fr_a.unwrap_or_else(|| force_rate(th_a));
+                    let fb = *fr_b.insert(force_rate(th_b));
+                    if fa > 0.0 && fb < 0.0 {
                         let tm = locate(force_rate, th_a, th_b, calls);
                         let (d, dd) = kin(dp, n, l, r, gap, tm);
                         if d > 0.0 && law.k * d + law.c * dd > force_noise(tm) {
@@ -1104,15 +1108,14 @@ fn earliest_event(
             } else if ends_on_force {
                 // F = kδ + cδ̇ falling at one sample and rising at the next has a minimum
                 // between them: an end (F < 0 there) that the force came back from.
-                let fr_b = force_rate(th_b);
-                if fr_a < 0.0 && fr_b > 0.0 {
+                let fb = *fr_b.insert(force_rate(th_b));
+                if fr_a.is_some_and(|fa| fa < 0.0) && fb > 0.0 {
                     let tm = locate(force_rate, th_a, th_b, calls);
                     let (d, dd) = kin(dp, n, l, r, gap, tm);
                     if d < 0.0 || law.k * d + law.c * dd < -force_noise(tm) {
                         bracket = Some((th_a, tm));
                     }
                 }
-                fr_a = fr_b;
             } else if dd_a < 0.0 && dd_b > 0.0 {
                 let tm = locate(|th| kin(dp, n, l, r, gap, th).1, th_a, th_b, calls);
                 if g_at(tm) < 0.0 {
@@ -1125,6 +1128,7 @@ fn earliest_event(
             th_a = th_b;
             d_a = d_b;
             dd_a = dd_b;
+            fr_a = fr_b;
         }
         if let Some((a, b)) = bracket {
             let th = locate(g_at, a, b, calls);
@@ -1619,27 +1623,26 @@ fn peak_between(
 mod tests {
     use super::*;
 
-    /// The clamped Kelvin–Voigt pair of the event tests below: two 1 t masses, k = 1e9 N/m,
-    /// c_r = 0.65, and one step of length `h` (s) from t = 0 in which the left mass moves
-    /// with δ(t) = d0 + v0 t + a0 t²/2 + j t³/6 (the right one at rest): a cubic, which the
-    /// dense output reproduces to round-off.
-    fn kelvin_voigt_step(h: f64, y: [f64; 4]) -> (System, Dopri5) {
-        let (sys, dp) = law_step(structure::scene::ContactLaw::KelvinVoigt, h, y);
-        assert!(sys.contacts[0].law.force_event());
-        (sys, dp)
-    }
-
-    /// [`kelvin_voigt_step`] with another contact law.
-    fn law_step(
-        law: structure::scene::ContactLaw,
-        h: f64,
-        [d0, v0, a0, j]: [f64; 4],
-    ) -> (System, Dopri5) {
+    /// The pair of the event tests below: two 1 t masses, k = 1e9 N/m, c_r = 0.65, `law`.
+    fn pair(law: structure::scene::ContactLaw) -> System {
         let mut scene =
             structure::testing::two_oscillators(1e3, 1e-6, 1e3, 1e-6, 1.0, 0.01, 0.65, 1.0);
         scene.gap_element.law = law;
         scene.gap_element.stiffness = 1e9;
-        let sys = System::new(&scene).unwrap();
+        System::new(&scene).unwrap()
+    }
+
+    /// The clamped Kelvin–Voigt pair.
+    fn kelvin_voigt_pair() -> System {
+        let sys = pair(structure::scene::ContactLaw::KelvinVoigt);
+        assert!(sys.contacts[0].law.force_event());
+        sys
+    }
+
+    /// One step of length `h` (s) from t = 0 in which the left mass of `sys` moves with
+    /// δ(t) = d0 + v0 t + a0 t²/2 + j t³/6 (the right one at rest): a cubic, which the dense
+    /// output reproduces to round-off.
+    fn step(sys: &System, h: f64, [d0, v0, a0, j]: [f64; 4]) -> Dopri5 {
         let y0 = [sys.contacts[0].gap + d0, 0.0, v0, 0.0];
         let mut f = |t: f64, y: &[f64], dy: &mut [f64]| {
             dy[0] = y[2];
@@ -1651,7 +1654,22 @@ mod tests {
         f(0.0, &y0, &mut dp.k[0]);
         assert!(dp.try_step(&mut f, 0.0, &y0, h).is_finite());
         dp.prepare_dense(0.0, &y0, h);
-        (sys, dp)
+        dp
+    }
+
+    /// The constant-acceleration dip of the clamped pair `sys`: a = 10 m/s², h = 1/ω_c, and
+    /// F(t) = A + B t + C t² = C (t − t*)² + F_min with C = k a/2 (A = kδ0 + c v0, B = k v0 +
+    /// c a), its minimum F_min = `f_min(C h²)` at t* = `frac` h.
+    fn dip(sys: &System, frac: f64, f_min: impl Fn(f64) -> f64) -> Dopri5 {
+        let law = &sys.contacts[0].law;
+        let (k, c) = (law.k, law.c);
+        let h = (law.m_eff / k).sqrt();
+        let a = 10.0;
+        let cc = 0.5 * k * a;
+        let v0 = -a * (frac * h + c / k);
+        let b = k * v0 + c * a;
+        let d0 = (f_min(cc * h * h) + b * b / (4.0 * cc) - c * v0) / k;
+        step(sys, h, [d0, v0, a, 0.0])
     }
 
     /// (δ, δ̇, F = kδ + cδ̇) of the pair's contact on the dense output at θ.
@@ -1670,19 +1688,9 @@ mod tests {
     /// root is t* − h/10. With h = 1/ω_c, c/k = 2ξ/ω_c = 0.27 h keeps δ > 0 at F's minimum.
     #[test]
     fn a_clamped_kelvin_voigt_end_between_samples_is_found() {
-        let (sys, _) = kelvin_voigt_step(1.0, [0.0; 4]);
-        let law = &sys.contacts[0].law;
-        let (k, c) = (law.k, law.c);
-        let h = (law.m_eff / k).sqrt();
-        let a = 10.0;
-        let cc = 0.5 * k * a;
+        let sys = kelvin_voigt_pair();
         for frac in [0.375, 0.625, 0.875, 0.125] {
-            // F = A + B t + C t², A = kδ0 + c v0, B = k v0 + c a, the minimum at t* = −B/2C.
-            let f_min = -0.01 * cc * h * h;
-            let v0 = -a * (frac * h + c / k);
-            let b = k * v0 + c * a;
-            let d0 = (f_min + b * b / (4.0 * cc) - c * v0) / k;
-            let (sys, dp) = kelvin_voigt_step(h, [d0, v0, a, 0.0]);
+            let dp = dip(&sys, frac, |ch2| -0.01 * ch2);
             for j in 0..=EVENT_SAMPLES {
                 let th = j as f64 / EVENT_SAMPLES as f64;
                 let (d, _, f) = kelvin_voigt_force(&sys, &dp, th);
@@ -1710,7 +1718,7 @@ mod tests {
     #[test]
     fn a_clamped_kelvin_voigt_closure_between_samples_is_found() {
         let (eps, q, r, len) = (0.01, 10.0, -10.0, 1e-6);
-        let (sys, _) = kelvin_voigt_step(1.0, [0.0; 4]);
+        let sys = kelvin_voigt_pair();
         let h = sys.contacts[0].law.c / sys.contacts[0].law.k;
         for s_star in [0.375, 0.625, 0.875, 0.125] {
             let f_hat = |s: f64| {
@@ -1737,7 +1745,7 @@ mod tests {
                 dh[2] * len / (h * h),
                 dh[3] * len / h.powi(3),
             ];
-            let (sys, dp) = kelvin_voigt_step(h, y);
+            let dp = step(&sys, h, y);
             for j in 0..=64 {
                 let th = j as f64 / 64.0;
                 let (d, dd, f) = kelvin_voigt_force(&sys, &dp, th);
@@ -1765,7 +1773,7 @@ mod tests {
     }
 
     /// Two edges of the clamped Kelvin–Voigt event search, on the constant-acceleration step
-    /// of [`a_clamped_kelvin_voigt_end_between_samples_is_found`] (F(t) = C (t − t*)² + F_min):
+    /// of [`dip`] (F(t) = C (t − t*)² + F_min):
     /// - a closed contact whose F dips to −1e-8 N between samples, within F's round-off
     ///   (64 ε of its terms, 2.8e-7 N here), does not end: read as an end, such a grazing
     ///   minimum ended and closed the contact every 6e-14 s in the stiffness study;
@@ -1774,27 +1782,15 @@ mod tests {
     ///   does a contact of the linear law in a dip of δ.
     #[test]
     fn grazing_minima_and_dips_after_a_release_are_read_as_such() {
-        let (sys, _) = kelvin_voigt_step(1.0, [0.0; 4]);
-        let law = &sys.contacts[0].law;
-        let (k, c) = (law.k, law.c);
-        let h = (law.m_eff / k).sqrt();
-        let a = 10.0;
-        let cc = 0.5 * k * a;
-        let step = |frac: f64, f_min: f64| {
-            let v0 = -a * (frac * h + c / k);
-            let b = k * v0 + c * a;
-            let d0 = (f_min + b * b / (4.0 * cc) - c * v0) / k;
-            kelvin_voigt_step(h, [d0, v0, a, 0.0])
-        };
+        let sys = kelvin_voigt_pair();
         let mut calls = 0;
-        let (sys, dp) = step(0.375, -1e-8);
+        let dp = dip(&sys, 0.375, |_| -1e-8);
         assert!(kelvin_voigt_force(&sys, &dp, 0.375).2 < 0.0);
         let mut ledger = ContactLedger::new(1, 1e9);
         ledger.close(0, 1.0, Episode::default());
         assert_eq!(earliest_event(&sys, &ledger, &dp, &mut calls), None);
 
-        let f_min = -0.005 * cc * h * h;
-        let (sys, dp) = step(0.1, f_min);
+        let dp = dip(&sys, 0.1, |ch2| -0.005 * ch2);
         for th in [0.0, 0.25] {
             assert!(kelvin_voigt_force(&sys, &dp, th).2 > 0.0);
         }
@@ -1805,10 +1801,13 @@ mod tests {
 
         // The same for the linear law, whose event is δ: δ(t) = (a/2)(t − 0.1 h)² − δ_m with
         // δ(0) = (a/2)(0.01 − 0.005) h² > 0 and δ(h/4) > 0, the far root at (0.1 + √0.005) h.
+        // a = 10 m/s² and h = 1/ω_c, as in the dip.
+        let sys = pair(structure::scene::ContactLaw::Linear);
+        let h = (sys.contacts[0].law.m_eff / sys.contacts[0].law.k).sqrt();
+        let (a, t_m) = (10.0, 0.1 * h);
         let d_m = 0.005 * 0.5 * a * h * h;
-        let (t_m, ac) = (0.1 * h, 0.5 * a);
-        let y = [ac * t_m * t_m - d_m, -a * t_m, a, 0.0];
-        let (sys, dp) = law_step(structure::scene::ContactLaw::Linear, h, y);
+        let y = [0.5 * a * t_m * t_m - d_m, -a * t_m, a, 0.0];
+        let dp = step(&sys, h, y);
         let gap = sys.contacts[0].gap;
         for th in [0.0, 0.25] {
             assert!(kin(&dp, sys.n, 0, Some(1), gap, th).0 > 0.0);
