@@ -1047,8 +1047,12 @@ fn earliest_event(
         };
         let samples = kin_samples(dp, n, l, r, gap);
         let (mut d_a, mut dd_a) = samples[0];
-        // dF/dt at θ_a where it was read (at every sample while closed).
-        let mut fr_a = ends_on_force.then(|| force_rate(0.0));
+        // dF/dt at θ_a where it was read (at every sample while closed), NaN elsewhere.
+        let mut fr_a = if ends_on_force {
+            force_rate(0.0)
+        } else {
+            f64::NAN
+        };
         let mut th_a = 0.0;
         let mut bracket: Option<(f64, f64)> = None;
         for (j, &(d_b, dd_b)) in samples.iter().enumerate().skip(1) {
@@ -1059,7 +1063,7 @@ fn earliest_event(
                 }
             }
             let g_b = law.event(d_b, dd_b);
-            let mut fr_b = None;
+            let mut fr_b = f64::NAN;
             if !closed {
                 if g_b > 0.0 {
                     bracket = Some((th_a, th_b));
@@ -1093,8 +1097,13 @@ fn earliest_event(
                     // 0): F rising at one sample and falling at the next has a maximum
                     // between them, a closure (F > 0 there, beyond its round-off, δ > 0)
                     // that ends again before the next sample.
-                    let fa = fr_a.unwrap_or_else(|| force_rate(th_a));
-                    let fb = *fr_b.insert(force_rate(th_b));
+                    let fa = if fr_a.is_nan() {
+                        force_rate(th_a)
+                    } else {
+                        fr_a
+                    };
+                    fr_b = force_rate(th_b);
+                    let fb = fr_b;
                     if fa > 0.0 && fb < 0.0 {
                         let tm = locate(force_rate, th_a, th_b, calls);
                         let (d, dd) = kin(dp, n, l, r, gap, tm);
@@ -1108,8 +1117,8 @@ fn earliest_event(
             } else if ends_on_force {
                 // F = kδ + cδ̇ falling at one sample and rising at the next has a minimum
                 // between them: an end (F < 0 there) that the force came back from.
-                let fb = *fr_b.insert(force_rate(th_b));
-                if fr_a.is_some_and(|fa| fa < 0.0) && fb > 0.0 {
+                fr_b = force_rate(th_b);
+                if fr_a < 0.0 && fr_b > 0.0 {
                     let tm = locate(force_rate, th_a, th_b, calls);
                     let (d, dd) = kin(dp, n, l, r, gap, tm);
                     if d < 0.0 || law.k * d + law.c * dd < -force_noise(tm) {
