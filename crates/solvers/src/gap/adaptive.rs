@@ -24,7 +24,9 @@
 //!    missed; for a closed clamped Kelvin–Voigt contact, the interior minimum of its force
 //!    F = kδ + cδ̇ (dF/dt = kδ̇ + cδ̈ changing sign), so an end that the force comes back
 //!    from is not missed either (a minimum within F's round-off is not an end), and while
-//!    such a contact is open and penetrating, the interior maximum of F. A contact released
+//!    such a contact is open and penetrating, the interior maximum of F. An interior extremum
+//!    of δ within δ's round-off (64 ε (|u_l| + |u_r| + gap)) is a graze: no end, no closure.
+//!    A contact released
 //!    at a root read on its positive side, in a dip of g that ends before θ = ¼, closes at
 //!    the dip's far root, not at once. The earliest sign change is located by Brent on the
 //!    interpolant; the step is
@@ -1008,7 +1010,8 @@ impl<'a> GapStepper<'a> {
 /// checked between samples, so a closure that opens again inside the step is not missed,
 /// and for a clamped Kelvin–Voigt contact the interior extremum of its force: a minimum
 /// while closed, a maximum while open and penetrating) and the first sign change located by
-/// Brent. `calls` counts the root-finder evaluations.
+/// Brent. An interior extremum within the round-off of its function (of F, or of δ) is a
+/// graze, not an event. `calls` counts the root-finder evaluations.
 fn earliest_event(
     sys: &System,
     ledger: &ContactLedger,
@@ -1044,6 +1047,20 @@ fn earliest_event(
                 (dp.dense(r, th).abs(), dp.dense(n + r, th).abs())
             });
             64.0 * f64::EPSILON * (law.k * (ul + ur + gap) + law.c * (vl + vr))
+        };
+        // The round-off of δ = u_l − u_r − gap, in the same measure: an interior extremum of
+        // δ no further from 0 than this is a graze, neither an end nor a closure.
+        let delta_noise = |th: f64| {
+            let ur = r.map_or(0.0, |r| dp.dense(r, th).abs());
+            64.0 * f64::EPSILON * (dp.dense(l, th).abs() + ur + gap)
+        };
+        // The round-off of g itself (F's for the clamped law, δ's otherwise).
+        let g_noise = |th: f64| {
+            if law.force_event() {
+                force_noise(th)
+            } else {
+                delta_noise(th)
+            }
         };
         let samples = kin_samples(dp, n, l, r, gap);
         let (mut d_a, mut dd_a) = samples[0];
@@ -1081,14 +1098,14 @@ fn earliest_event(
                         };
                         if rate(0.0) < 0.0 && rate(th_b) > 0.0 {
                             let tm = locate(rate, 0.0, th_b, calls);
-                            if g_at(tm) < 0.0 {
+                            if g_at(tm) < -g_noise(tm) {
                                 bracket = Some((tm, th_b));
                             }
                         }
                     }
                 } else if dd_a > 0.0 && dd_b < 0.0 {
                     let tm = locate(|th| kin(dp, n, l, r, gap, th).1, th_a, th_b, calls);
-                    if g_at(tm) > 0.0 {
+                    if g_at(tm) > 0.0 && kin(dp, n, l, r, gap, tm).0 > delta_noise(tm) {
                         bracket = Some((th_a, tm));
                     }
                 }
@@ -1127,7 +1144,7 @@ fn earliest_event(
                 }
             } else if dd_a < 0.0 && dd_b > 0.0 {
                 let tm = locate(|th| kin(dp, n, l, r, gap, th).1, th_a, th_b, calls);
-                if g_at(tm) < 0.0 {
+                if g_at(tm) < -delta_noise(tm) {
                     bracket = Some((th_a, tm));
                 }
             }
@@ -1827,6 +1844,70 @@ mod tests {
             (th - far).abs() < 1e-9,
             "linear law: θ = {th} against {far}"
         );
+    }
+
+    /// The δ event of the linear law has a round-off floor, as the clamped law's force has:
+    /// with the pair's u_l ≈ gap = 1 cm, δ = u_l − u_r − gap is known to 64 ε (|u_l| + |u_r| +
+    /// gap) ≈ 2.8e-16 m. On the constant-acceleration step δ(t) = ±((a/2)(t − t*)² − δ_m)
+    /// (a = 10 m/s², h = 1/ω_c, t* = 3h/8, so δ has the sign of ∓δ_m only within 6e-5 h of t*
+    /// and the opposite one at the samples):
+    /// - a closed contact whose δ dips to −1e-16 m is not ended by it, one that dips to
+    ///   −1e-14 m ends at the dip's first root;
+    /// - an open contact whose δ rises to +1e-16 m is not closed by it, one that rises to
+    ///   +1e-14 m closes at the first root;
+    /// - a contact released at δ's root, read on its positive side, in a dip to −1e-16 m that
+    ///   ends before the first sample closes again at once (at −1e-14 m: at the far root).
+    #[test]
+    fn grazing_extrema_of_delta_are_no_events() {
+        let sys = pair(structure::scene::ContactLaw::Linear);
+        let gap = sys.contacts[0].gap;
+        let h = (sys.contacts[0].law.m_eff / sys.contacts[0].law.k).sqrt();
+        let a = 10.0;
+        // δ(t) = sign ((a/2)(t − t*)² − d_m) as [δ0, δ̇0, δ̈, 0].
+        let parabola = |sign: f64, frac: f64, d_m: f64| {
+            let t_s = frac * h;
+            [
+                sign * (0.5 * a * t_s * t_s - d_m),
+                -sign * a * t_s,
+                sign * a,
+                0.0,
+            ]
+        };
+        let delta = |dp: &Dopri5, th: f64| kin(dp, sys.n, 0, Some(1), gap, th).0;
+        let mut closed = ContactLedger::new(1, 1e9);
+        closed.close(0, 1.0, Episode::default());
+        let open = ContactLedger::new(1, 1e9);
+        let mut calls = 0;
+        for (sign, ledger) in [(1.0, &closed), (-1.0, &open)] {
+            for d_m in [1e-16, 1e-14] {
+                let dp = step(&sys, h, parabola(sign, 0.375, d_m));
+                for j in 0..=EVENT_SAMPLES {
+                    let th = j as f64 / EVENT_SAMPLES as f64;
+                    assert!(sign * delta(&dp, th) > 0.0, "δ at θ = {th}");
+                }
+                assert!(sign * delta(&dp, 0.375) < 0.0, "δ at the extremum");
+                let event = earliest_event(&sys, ledger, &dp, &mut calls);
+                if d_m < 1e-15 {
+                    assert_eq!(event, None, "a graze of {d_m} m (sign {sign})");
+                } else {
+                    let (th, _) = event.expect("an extremum beyond round-off");
+                    let root = 0.375 - (2.0 * d_m / a).sqrt() / h;
+                    assert!((th - root).abs() < 1e-9, "θ = {th} against {root}");
+                }
+            }
+        }
+        for d_m in [1e-16, 1e-14] {
+            // The dip's minimum at 0.1 h, δ(0) = (a/2)(0.1 h)² − d_m > 0.
+            let dp = step(&sys, h, parabola(1.0, 0.1, d_m));
+            assert!(delta(&dp, 0.0) > 0.0 && delta(&dp, 0.1) < 0.0);
+            let (th, _) = earliest_event(&sys, &open, &dp, &mut calls).unwrap();
+            let far = if d_m < 1e-15 {
+                0.0
+            } else {
+                0.1 + (2.0 * d_m / a).sqrt() / h
+            };
+            assert!((th - far).abs() < 1e-9, "θ = {th} against {far}");
+        }
     }
 
     /// The three-level bisection picks exactly the point of the plain one, also for a rate
