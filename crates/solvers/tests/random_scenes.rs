@@ -166,13 +166,13 @@
 //! (`the_held_comparison_has_no_band_floor` keeps the fourteen).
 //!
 //! What the sweeps still fail, and what they failed before (the default seeds pass). Over
-//! 0 … 3999 every invariant passes; over the held-out 4000 … 25999 only event storms fail: the
+//! 0 … 3999 every invariant passes; over the held-out 4000 … 29999 only event storms fail: the
 //! energy audits on 7225, 14904 and 19253, refinement on 4601, 7225, 13601, 13871, 14560,
 //! 14904, 19253, 23156 and 24913, momentum against impulse on 19253 (refinement and momentum
 //! against impulse swept over 0 … 17999 at the three round-off probes, below; every other test
 //! over 0 … 9999 in one run on 2026-11-29, `POUND_RANDOM_SEEDS=10000`, 1 756 s on two cores
 //! beside other work, over 10000 … 17999 in the two first sweeps below, over 18000 … 21999 at
-//! defect 20's code, and over 22000 … 25999 in its first sweep below).
+//! defect 20's code, and over 22000 … 29999 in their first sweeps below).
 //! Until the probes were widened, momentum against impulse failed on 6471 and 7228 as well:
 //! - Held out 8000 … 9999, first swept on 2026-11-29: four failures, all mended. 9906
 //!   (refinement: 87 impacts on the record, 86 on it refined 2×) had two defects of the closure
@@ -237,6 +237,13 @@
 //!   method at 1e-8 and 1e-12 finds the momentum method's impacts on each input (23156: 351 on
 //!   the record, 1 314 / 1 347 / 1 299 refined; its record's run captures contact 2 at
 //!   1.491017 s, the refined run, whose record step the capture reads, at 1.501124 s).
+//! - Held out 26000 … 29999, first swept on 2026-11-29 (third session) at commit 0e6d3e5 (every
+//!   test, one run, 912 s): refinement failed 27033 on the overlap audit (A4–B4: 4.3e-8 of the
+//!   largest displacement against 2.6e-9), every other test passed. Its maximum lies where an
+//!   impact turns the floors back and moves with that impact's instant, which its undamped
+//!   rattle at c_r = 1 moves under round-off (the probes: 4.6e-9 s, the overlap 3.0e-8, the
+//!   peaks 2.6e-11). Overlaps now have their own round-off allowance (`round_off_responses`);
+//!   refinement over 0 … 29999 then fails only on the nine storms listed above.
 //! - Before defect 15, the thirteen held seeds above, at a floor of about 1e-8 that the held
 //!   tolerance did not control (541: 9.7e-9 at 1e-8 and at 1e-10); before defect 12, 32
 //!   others (65, 75, 113, 145, 360, 402, 541, 715, 851 and 23 of 1000 … 3999); before linear
@@ -756,7 +763,18 @@ const MOVED_IMPACT: f64 = 1e-6;
 /// amplifies any difference, round-off included, and this measures by how much on the scene
 /// at hand.
 fn round_off_response(scene: &Scene, mom: &RunOutput) -> (f64, bool) {
-    let (mut pert, mut same) = (0.0_f64, true);
+    let (pert, _, same) = round_off_responses(scene, mom);
+    (pert, same)
+}
+
+/// [`round_off_response`] with the overlap audit's own response beside the peaks' (the
+/// largest [`overlap_diff`] over the probes). An overlap maximum taken where an impact
+/// turns the floors back moves with the impact's instant, far more than the peaks: on
+/// held-out seed 27033 (undamped, c_r = 1, 37 impacts) the probes move impact instants by up
+/// to 4.6e-9 s and its A4–B4 overlap maximum by 3.0e-8 of the largest displacement, its peaks
+/// by 2.6e-11.
+fn round_off_responses(scene: &Scene, mom: &RunOutput) -> (f64, f64, bool) {
+    let (mut pert, mut pert_overlaps, mut same) = (0.0_f64, 0.0_f64, true);
     for k in ROUND_OFF_PROBES {
         let mut s = scene.clone();
         let g = s.ground.as_mut().unwrap();
@@ -766,12 +784,13 @@ fn round_off_response(scene: &Scene, mom: &RunOutput) -> (f64, bool) {
         match solvers::run(&s, Method::Momentum, None) {
             Ok(o) => {
                 pert = pert.max(peak_diff(mom, &o).0);
+                pert_overlaps = pert_overlaps.max(overlap_diff(mom, &o));
                 same &= impact_diff(mom, &o).is_ok_and(|(dt, _)| dt <= MOVED_IMPACT);
             }
-            Err(_) => return (f64::INFINITY, false),
+            Err(_) => return (f64::INFINITY, f64::INFINITY, false),
         }
     }
-    (pert, same)
+    (pert, pert_overlaps, same)
 }
 
 fn verbose() -> bool {
@@ -1085,7 +1104,7 @@ fn refined_verdict(c: &Case) -> Verdict {
         if grid_dependent(&a) || grid_dependent(&b) {
             return Verdict::Skip("held, captured or touching contacts (grid-dependent)".into());
         }
-        let (pert, same) = round_off_response(&c.scene, &a);
+        let (pert, pert_overlaps, same) = round_off_responses(&c.scene, &a);
         let (dt, dv) = match impact_diff(&a, &b) {
             Ok(x) => x,
             Err(_) if !same => {
@@ -1095,6 +1114,7 @@ fn refined_verdict(c: &Case) -> Verdict {
         };
         let o = overlap_diff(&a, &b);
         let allowed = REFINED_PEAKS.max(100.0 * pert);
+        let allowed_overlaps = REFINED_PEAKS.max(100.0 * pert_overlaps);
         if verbose() {
             eprintln!(
                 "seed {} k {k}: impacts {} peaks {d:.3e} ({at}) impact times {dt:.3e} velocities {dv:.3e} overlaps {o:.3e}",
@@ -1102,15 +1122,17 @@ fn refined_verdict(c: &Case) -> Verdict {
                 a.impacts.len(),
             );
         }
-        if !(d <= allowed && o <= allowed) {
+        if !(d <= allowed && o <= allowed_overlaps) {
             return Verdict::Fail(format!(
                 "refined {k}x: peaks differ by {d:.3e} ({at}), overlaps by {o:.3e}; a \
-                 round-off change of the record moves them by {pert:.3e}"
+                 round-off change of the record moves them by {pert:.3e} and \
+                 {pert_overlaps:.3e}"
             ));
         }
         Verdict::Pass(vec![
             ("peaks", d),
             ("round-off response of the peaks", pert),
+            ("round-off response of the overlaps", pert_overlaps),
             ("impact times (s)", dt),
             ("impact velocities / approach", dv),
             ("overlaps / largest displacement", o),
