@@ -1610,6 +1610,21 @@ fn gap_verdict(c: &Case) -> Verdict {
     Verdict::Pass(v)
 }
 
+/// The regressions' end checks on a momentum run that reached the end: its balance error,
+/// relative to the larger of input, initial and damping energy (without the static energy of
+/// [`momentum_balance`], so stricter), within [`MOMENTUM_BALANCE`], and every impact resolved
+/// within [`IMPACT_GAP_RATIO`] × the band. `what` names the run in the messages.
+fn assert_momentum_run_clean(what: &str, out: &RunOutput, d: &solvers::momentum::Diagnostics) {
+    let e = &out.energy;
+    let balance = e.balance_error.abs() / e.input.abs().max(e.initial).max(e.damping);
+    assert!(balance <= MOMENTUM_BALANCE, "{what}: balance {balance:.3e}");
+    assert!(
+        d.impact_gap_ratio <= IMPACT_GAP_RATIO,
+        "{what}: an impact at |δ| = {:.3e} × the band",
+        d.impact_gap_ratio
+    );
+}
+
 /// A contact at rest after a plastic impact with a separating relative acceleration is not
 /// closing: random seed 3927 at `momentum.held_tolerance` = 1e-8 (a one-floor building struck
 /// from both sides at one instant, contacts at c_r = 0 and 0.79) stopped with `Stalled` at
@@ -1628,17 +1643,7 @@ fn touching_contacts_separating_from_rest_do_not_stall() {
     tight.momentum.held_tolerance = HELD_TIGHT;
     let (out, d) = solvers::momentum::solve_with_diagnostics(&tight, None)
         .unwrap_or_else(|e| panic!("seed 3927: {e}\n{}", case.what));
-    let e = &out.energy;
-    let balance = e.balance_error.abs() / e.input.abs().max(e.initial).max(e.damping);
-    assert!(
-        balance <= MOMENTUM_BALANCE,
-        "seed 3927: balance {balance:.3e}"
-    );
-    assert!(
-        d.impact_gap_ratio <= IMPACT_GAP_RATIO,
-        "seed 3927: an impact at |δ| = {:.3e} × the band",
-        d.impact_gap_ratio
-    );
+    assert_momentum_run_clean("seed 3927", &out, &d);
 }
 
 /// A contact released at the top of its round-off band, where its relative acceleration is 0
@@ -1657,17 +1662,7 @@ fn a_release_with_a_round_off_rise_does_not_stall() {
     let case = draw(21091);
     let (out, d) = solvers::momentum::solve_with_diagnostics(&refine(&case.scene, 3), None)
         .unwrap_or_else(|e| panic!("seed 21091 refined 3x: {e}\n{}", case.what));
-    let e = &out.energy;
-    let balance = e.balance_error.abs() / e.input.abs().max(e.initial).max(e.damping);
-    assert!(
-        balance <= MOMENTUM_BALANCE,
-        "seed 21091: balance {balance:.3e}"
-    );
-    assert!(
-        d.impact_gap_ratio <= IMPACT_GAP_RATIO,
-        "seed 21091: an impact at |δ| = {:.3e} × the band",
-        d.impact_gap_ratio
-    );
+    assert_momentum_run_clean("seed 21091 refined 3x", &out, &d);
     let record = solvers::run(&case.scene, Method::Momentum, None).unwrap();
     assert_eq!(
         out.impacts.len(),
@@ -1702,19 +1697,7 @@ fn held_segment_regressions_run_clean() {
         let case = draw(seed);
         let (out, d) = solvers::momentum::solve_with_diagnostics(&case.scene, None)
             .unwrap_or_else(|e| panic!("seed {seed}: {e}\n{}", case.what));
-        let e = &out.energy;
-        let balance = e.balance_error.abs() / e.input.abs().max(e.initial).max(e.damping);
-        assert!(
-            d.impact_gap_ratio <= IMPACT_GAP_RATIO,
-            "seed {seed}: an impact at |δ| = {:.3e} × the band\n{}",
-            d.impact_gap_ratio,
-            case.what
-        );
-        assert!(
-            balance <= MOMENTUM_BALANCE,
-            "seed {seed}: balance {balance:.3e}\n{}",
-            case.what
-        );
+        assert_momentum_run_clean(&format!("seed {seed}\n{}", case.what), &out, &d);
         assert!(
             !projects || d.gap_projections > 0,
             "seed {seed}: no gap projection (the scene no longer exercises the fix)\n{}",

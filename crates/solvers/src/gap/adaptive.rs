@@ -1105,7 +1105,8 @@ fn earliest_event(
                     }
                 } else if dd_a > 0.0 && dd_b < 0.0 {
                     let tm = locate(|th| kin(dp, n, l, r, gap, th).1, th_a, th_b, calls);
-                    if g_at(tm) > 0.0 && kin(dp, n, l, r, gap, tm).0 > delta_noise(tm) {
+                    let (d, dd) = kin(dp, n, l, r, gap, tm);
+                    if law.event(d, dd) > 0.0 && d > delta_noise(tm) {
                         bracket = Some((th_a, tm));
                     }
                 }
